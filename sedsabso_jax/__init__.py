@@ -1,0 +1,26 @@
+"""sedsabso-jax: identify the dynamic parameters of serial robots with JAX.
+
+Importing the package turns on JAX's 64-bit mode (``jax_enable_x64``): the regressor and
+the base-parameter reduction need float64, and float32 stays available to any code that
+asks for it explicitly (the swarms can run in float32).
+"""
+
+import jax as _jax
+
+_jax.config.update("jax_enable_x64", True)
+
+from importlib.metadata import PackageNotFoundError as _NotFound  # noqa: E402
+from importlib.metadata import version as _version  # noqa: E402
+
+from . import robots as robots  # noqa: E402
+from .base_parameters import BaseParameters as BaseParameters  # noqa: E402
+from .base_parameters import base_parameters as base_parameters  # noqa: E402
+from .kinematics import forward_kinematics as forward_kinematics  # noqa: E402
+from .regressor import inverse_dynamics as inverse_dynamics  # noqa: E402
+from .regressor import regressor as regressor  # noqa: E402
+from .robot import Robot as Robot  # noqa: E402
+
+try:
+    __version__ = _version("sedsabso-jax")
+except _NotFound:  # running from a source tree that is not installed
+    __version__ = "0+unknown"

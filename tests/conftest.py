@@ -1,0 +1,207 @@
+"""Shared fixtures: random robots written as URDF or DH tables, and independent
+pinocchio models built from the same descriptions (never from the package's own model)."""
+
+from __future__ import annotations
+
+import zlib
+
+import numpy as np
+import pytest
+
+import sedsabso_jax  # noqa: F401  (turns on float64)
+
+# pinocchio orders a body's parameters [m mx my mz Ixx Ixy Iyy Ixz Iyz Izz]; the project
+# orders them [Ixx Iyy Izz Ixy Ixz Iyz m mx my mz].
+PIN_TO_OURS = np.array([4, 6, 9, 5, 7, 8, 0, 1, 2, 3])
+
+
+def random_rotation(rng) -> np.ndarray:
+    Q, R = np.linalg.qr(rng.standard_normal((3, 3)))
+    Q = Q * np.sign(np.diag(R))
+    return Q if np.linalg.det(Q) > 0 else -Q
+
+
+def random_inertial(rng):
+    """Physically consistent (mass, CoM, inertia about the CoM) with random principal axes."""
+    mass = rng.uniform(0.5, 5.0)
+    com = rng.uniform(-0.3, 0.3, 3)
+    a, b = rng.uniform(0.01, 0.5, 2)
+    principal = np.array([a, b, rng.uniform(abs(a - b) + 1e-3, a + b)])
+    R = random_rotation(rng)
+    return mass, com, R @ np.diag(principal) @ R.T
+
+
+INERTIA_KEYS = {"ixx": (0, 0), "ixy": (0, 1), "ixz": (0, 2), "iyy": (1, 1), "iyz": (1, 2),
+                "izz": (2, 2)}
+
+
+def _fmt(v) -> str:
+    return " ".join(repr(float(x)) for x in v)
+
+
+def random_urdf(rng, n_movable: int, *, prismatic_prob=0.2, fixed_prob=0.3,
+                friction=False, branch=False) -> tuple[str, list[str]]:
+    """A serial URDF with ``n_movable`` revolute/prismatic joints at random axes and
+    origins, random fixed joints in between (and after the last), random inertials.
+
+    With ``branch``, a second movable chain of two joints hangs off the second link.
+    Returns the text and the names of the links in chain order (last is the tip).
+    """
+    parts = ['<?xml version="1.0"?>', '<robot name="random">']
+    link_names = []
+
+    def link(name, with_inertial=True):
+        if not with_inertial:
+            parts.append(f'<link name="{name}"/>')
+            return
+        m, com, I = random_inertial(rng)
+        rpy = rng.uniform(-np.pi, np.pi, 3)
+        # express the inertia in a rotated inertial frame to exercise <origin rpy>
+        from sedsabso_jax._spatial import rpy_matrix
+
+        Rin = rpy_matrix(rpy)
+        Iin = Rin.T @ I @ Rin
+        parts.append(
+            f'<link name="{name}"><inertial><origin xyz="{_fmt(com)}" rpy="{_fmt(rpy)}"/>'
+            f'<mass value="{float(m)!r}"/><inertia '
+            + " ".join(f'{k}="{float(Iin[a, b])!r}"' for k, (a, b) in INERTIA_KEYS.items())
+            + "/>"
+            "</inertial></link>"
+        )
+
+    def joint(name, kind, parent, child):
+        xyz = rng.uniform(-0.4, 0.4, 3)
+        rpy = rng.uniform(-np.pi, np.pi, 3)
+        text = f'<joint name="{name}" type="{kind}"><parent link="{parent}"/>'
+        text += f'<child link="{child}"/><origin xyz="{_fmt(xyz)}" rpy="{_fmt(rpy)}"/>'
+        if kind != "fixed":
+            axis = rng.standard_normal(3)
+            axis /= np.linalg.norm(axis)
+            text += f'<axis xyz="{_fmt(axis)}"/>'
+            text += '<limit lower="-3" upper="3" effort="100" velocity="5"/>'
+            if friction:
+                text += (f'<dynamics friction="{float(rng.uniform(0, 2))!r}" '
+                         f'damping="{float(rng.uniform(0, 2))!r}"/>')
+        parts.append(text + "</joint>")
+
+    link("base")
+    parent, k = "base", 0
+    for i in range(n_movable):
+        if rng.uniform() < fixed_prob:
+            name = f"fixed_{k}"
+            link(name)
+            joint(f"jf{k}", "fixed", parent, name)
+            parent, k = name, k + 1
+        child = f"link{i + 1}"
+        link(child)
+        joint(f"j{i + 1}", "prismatic" if rng.uniform() < prismatic_prob else "revolute",
+              parent, child)
+        link_names.append(child)
+        parent = child
+    # a rigid tool on the last link
+    link("tool")
+    joint("jtool", "fixed", parent, "tool")
+    link_names.append("tool")
+    if branch:
+        link("side1")
+        joint("side_j1", "revolute", "link1", "side1")
+        link("side2")
+        joint("side_j2", "revolute", "side1", "side2")
+    parts.append("</robot>")
+    return "\n".join(parts), link_names
+
+
+def random_dh(rng, n: int, prismatic_prob=0.2):
+    """A random DH table (either convention) and physically consistent link parameters."""
+    table = {
+        "alpha": rng.uniform(-np.pi, np.pi, n),
+        "a": rng.uniform(-0.5, 0.5, n),
+        "d": rng.uniform(-0.5, 0.5, n),
+        "theta": rng.uniform(-np.pi, np.pi, n),
+        "prismatic": rng.uniform(size=n) < prismatic_prob,
+    }
+    from sedsabso_jax._spatial import params_from_com
+
+    params = []
+    for _ in range(n):
+        m, com, I = random_inertial(rng)
+        params += list(params_from_com(m, com, I)) + list(rng.uniform(0, 1, 2))
+    return table, np.array(params)
+
+
+def pin_inertia(params10):
+    """pinocchio Inertia from the project's 10 parameters (about the frame origin)."""
+    import pinocchio as pin
+
+    return pin.Inertia.FromDynamicParameters(np.asarray(params10)[np.argsort(PIN_TO_OURS)])
+
+
+def pin_from_mdh(table, params):
+    """pinocchio model of a modified-DH chain, composed with pinocchio's SE3 algebra."""
+    import pinocchio as pin
+
+    model = pin.Model()
+    parent = 0
+    for i in range(len(table["a"])):
+        placement = (
+            pin.SE3(pin.utils.rotate("x", table["alpha"][i]), np.zeros(3))
+            * pin.SE3(np.eye(3), np.array([table["a"][i], 0.0, 0.0]))
+            * pin.SE3(pin.utils.rotate("z", table["theta"][i]), np.zeros(3))
+            * pin.SE3(np.eye(3), np.array([0.0, 0.0, table["d"][i]]))
+        )
+        jm = pin.JointModelPZ() if table["prismatic"][i] else pin.JointModelRZ()
+        parent = model.addJoint(parent, jm, placement, f"j{i + 1}")
+        body = pin_inertia(params[12 * i: 12 * i + 10])
+        model.appendBodyToJoint(parent, body, pin.SE3.Identity())
+    return model
+
+
+def pin_from_dh(table, params):
+    """pinocchio model of a standard-DH chain: joint i turns about z_{i-1}; link i's body
+    (its parameters given in DH frame i) hangs at RotZ(theta) TransZ(d) TransX(a) RotX(alpha)."""
+    import pinocchio as pin
+
+    model = pin.Model()
+    parent, previous = 0, pin.SE3.Identity()
+    for i in range(len(table["a"])):
+        jm = pin.JointModelPZ() if table["prismatic"][i] else pin.JointModelRZ()
+        parent = model.addJoint(parent, jm, previous, f"j{i + 1}")
+        M = (
+            pin.SE3(pin.utils.rotate("z", table["theta"][i]), np.array([0, 0, table["d"][i]]))
+            * pin.SE3(pin.utils.rotate("x", table["alpha"][i]), np.array([table["a"][i], 0, 0]))
+        )
+        model.appendBodyToJoint(parent, pin_inertia(params[12 * i: 12 * i + 10]), M)
+        previous = M
+    return model
+
+
+def pin_regressor_in_our_order(model, q, qd, qdd):
+    """pinocchio's joint-torque regressor with columns in the project's order
+    (friction columns left out): (n, 10 n)."""
+    import pinocchio as pin
+
+    data = model.createData()
+    n = model.nv
+    Y = np.reshape(pin.computeJointTorqueRegressor(model, data, q, qd, qdd), (n, 10 * n))
+    return np.concatenate([Y[:, 10 * i: 10 * i + 10][:, PIN_TO_OURS] for i in range(n)], 1)
+
+
+def inertial_columns(Y, n):
+    """The 10 inertial columns per link of a project regressor (..., n, 12 n)."""
+    return np.concatenate([Y[..., 12 * i: 12 * i + 10] for i in range(n)], -1)
+
+
+def friction_torque(params, qd):
+    p = np.asarray(params).reshape(-1, 12)
+    return p[:, 10] * np.sign(qd) + p[:, 11] * qd
+
+
+def random_state(rng, robot, k=None):
+    shape = (robot.n_joints,) if k is None else (k, robot.n_joints)
+    return rng.uniform(-2, 2, shape), rng.standard_normal(shape), rng.standard_normal(shape)
+
+
+@pytest.fixture
+def rng(request):
+    # a seed per test, stable across runs
+    return np.random.default_rng(zlib.crc32(request.node.nodeid.encode()))

@@ -1,0 +1,76 @@
+"""The command line: the RS010N table, any URDF, errors as one line with exit status 2."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from sedsabso_jax.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_default_prints_rs010n_table(capsys):
+    assert main([]) == 0
+    out = capsys.readouterr().out
+    assert "RS010N: 21 base parameters of 36" in out
+    rows = [line for line in out.splitlines() if re.match(r"\| \d+ ", line)]
+    assert len(rows) == 21
+    first = [c.strip() for c in rows[0].strip("|").split("|")]
+    assert first[1:4] == ["ZZ1R", "ZZ1 + YY2 + 0.1225*M2 + YY3 + 1.193725*M3", "71.9201"]
+    assert first[5] == "16.41"  # the paper's value, in the paper's column
+    assert "paper's Table 5 value" in out
+
+
+def test_base_parameters_of_the_kuka(capsys):
+    assert main(["base-parameters", "--robot", "kuka_lwr4"]) == 0
+    assert "kuka-lwr: 57 base parameters of 84" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["base-parameters", "--robot", "missing.urdf"], "no such file 'missing.urdf'"),
+    (["base-parameters", "--robot", "puma"], "must be one of"),
+    (["base-parameters", "--robot", "rs010n", "--tip", "x"], "--tip applies to URDF files"),
+])
+def test_errors_are_one_line(capsys, argv, message):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_malformed_urdf_is_one_line(tmp_path, capsys):
+    path = tmp_path / "bad.urdf"
+    path.write_text("<robot name='r'><link")
+    assert main(["base-parameters", "--robot", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "not well-formed XML" in err and err.count("\n") == 1
+
+
+def test_console_script_runs():
+    """The installed entry point (python -m form, same code path)."""
+    run = subprocess.run([sys.executable, "-m", "sedsabso_jax", "base-parameters", "--robot",
+                          "nowhere.urdf"], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2 and "Traceback" not in run.stderr
+
+
+def test_readme_commands_match_ci():
+    """.ci/run runs the README's test command verbatim."""
+    readme = (ROOT / "README.md").read_text()
+    ci = (ROOT / ".ci" / "run").read_text()
+    blocks = re.findall(r"```bash\n(.*?)```", readme, flags=re.S)
+    assert len(blocks) >= 2, "the README opens with two bash blocks: main job, tests"
+    test_command = blocks[1].strip()
+    assert test_command in ci
+
+
+def test_readme_example_runs():
+    """The README's quick example executes as written."""
+    readme = (ROOT / "README.md").read_text()
+    example = re.findall(r"```python\n(.*?)```", readme, flags=re.S)[0]
+    namespace: dict = {}
+    exec(compile(example, "README.md", "exec"), namespace)  # noqa: S102
+    assert namespace["Y"].shape == (1000, 3, 36)
