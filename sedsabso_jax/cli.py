@@ -29,9 +29,9 @@ def _load_robot(spec: str, tip: str | None):
     return robots.from_urdf(spec, tip=tip)
 
 
-def base_parameter_table(robot) -> str:
-    """Markdown table: name, expression, value from the robot's parameters, and for the
-    RS010N the paper's Table 5 theoretical value beside it."""
+def base_parameter_table(robot, *, paper_columns: bool = False) -> str:
+    """Markdown table: name, expression, value from the robot's parameters; with
+    ``paper_columns`` (the built-in RS010N) the paper's Table 5 beside it."""
     import numpy as np
 
     from . import paper
@@ -39,14 +39,13 @@ def base_parameter_table(robot) -> str:
 
     base = base_parameters(robot)
     values = np.asarray(base.values)
-    is_paper_robot = robot.name == "RS010N"
-    head = ["#", "base parameter", "expression", "value (Table 2)" if is_paper_robot else "value"]
-    if is_paper_robot:
+    head = ["#", "base parameter", "expression", "value (Table 2)" if paper_columns else "value"]
+    if paper_columns:
         head += ["paper's Table 5 expression", "paper's Table 5 value"]
     rows = []
     for i, (name, expr, value) in enumerate(zip(base.names, base.expressions, values), 1):
         row = [str(i), name, expr, f"{value:.4f}"]
-        if is_paper_robot:
+        if paper_columns:
             label, published = paper.TABLE5_THEORETICAL.get(name, ("", None))
             row += [label, "" if published is None else f"{published:g}"]
         rows.append(row)
@@ -60,7 +59,7 @@ def base_parameter_table(robot) -> str:
         "|" + "|".join("-" * (w + 2) for w in widths) + "|",
         *(fmt(r) for r in rows),
     ]
-    if is_paper_robot:
+    if paper_columns:
         lines += [
             "",
             "Values are computed from the paper's Table 2. The paper's Table 5 column is shown",
@@ -70,7 +69,8 @@ def base_parameter_table(robot) -> str:
 
 
 def _cmd_base_parameters(args) -> None:
-    print(base_parameter_table(_load_robot(args.robot, args.tip)))
+    robot = _load_robot(args.robot, args.tip)
+    print(base_parameter_table(robot, paper_columns=args.robot == "rs010n"))
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -98,6 +98,9 @@ def main(argv: list[str] | None = None) -> int:
             if not args.debug:
                 warnings.simplefilter("ignore", UserWarning)
             args.func(args)
+    except BrokenPipeError:  # output piped into e.g. `head`: stop quietly (Python docs recipe)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     except (ValueError, TypeError, OSError, RuntimeError) as err:
         if args.debug:
             raise
