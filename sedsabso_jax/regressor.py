@@ -23,7 +23,7 @@ Newton-Euler in the form that is linear in the inertial parameters (Khalil & Dom
    and the friction columns ``sign(qd_j), qd_j`` on the diagonal.
 
 Exact (no differentiation, no approximation), jit-compiled, batched over any leading axes.
-The samples are processed in chunks of :data:`CHUNK` under ``lax.map`` so that the
+The samples are processed in chunks under ``lax.map`` (see :func:`chunk_size`) so that the
 ``(n, n)`` intermediates stay in cache and memory stays bounded for large batches.
 """
 
@@ -39,8 +39,11 @@ from ._checks import joint_arrays
 from .kinematics import cross, link_poses, rotate, rotate_back
 from .robot import Robot
 
-#: Samples per chunk of the batched regressor.
-CHUNK = 16
+def chunk_size(n_joints: int) -> int:
+    """Samples per ``lax.map`` chunk. The intermediates grow as n^2 per sample; measured
+    on a 2-core CPU (benchmarks/regressor.py, 10,000 samples), 16 was fastest for 3
+    joints and 8 for 7 joints (1, 2, 4, 8, 16, 32 tried)."""
+    return 16 if n_joints <= 4 else 8
 
 
 def _regressor(robot: Robot, q, qd, qdd):
@@ -95,7 +98,7 @@ def _regressor(robot: Robot, q, qd, qdd):
 def _chunked(robot: Robot, q, qd, qdd):
     batch, n = q.shape[:-1], q.shape[-1]
     flat = [x.reshape((-1, n)) for x in (q, qd, qdd)]
-    Y = jax.lax.map(lambda s: _regressor(robot, *s), flat, batch_size=CHUNK)
+    Y = jax.lax.map(lambda s: _regressor(robot, *s), flat, batch_size=chunk_size(n))
     return Y.reshape(batch + Y.shape[1:])
 
 
