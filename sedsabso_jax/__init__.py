@@ -12,13 +12,21 @@ _jax.config.update("jax_enable_x64", True)
 from importlib.metadata import PackageNotFoundError as _NotFound  # noqa: E402
 from importlib.metadata import version as _version  # noqa: E402
 
+from . import baselines as baselines  # noqa: E402
 from . import robots as robots  # noqa: E402
 from .base_parameters import BaseParameters as BaseParameters  # noqa: E402
 from .base_parameters import base_parameters as base_parameters  # noqa: E402
+from .bso import BSO as BSO  # noqa: E402
+from .fitness import BlackBox as BlackBox  # noqa: E402
+from .fitness import L1Residual as L1Residual  # noqa: E402
 from .kinematics import forward_kinematics as forward_kinematics  # noqa: E402
+from .ldwpso import LDWPSO as LDWPSO  # noqa: E402
 from .regressor import inverse_dynamics as inverse_dynamics  # noqa: E402
 from .regressor import regressor as regressor  # noqa: E402
+from .result import Result as Result  # noqa: E402
 from .robot import Robot as Robot  # noqa: E402
+from .sedsabso import SEDSABSO as SEDSABSO  # noqa: E402
+from .swarm import minimise as minimise  # noqa: E402
 
 try:
     __version__ = _version("sedsabso-jax")

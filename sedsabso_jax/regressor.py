@@ -39,6 +39,7 @@ from ._checks import joint_arrays
 from .kinematics import cross, link_poses, rotate, rotate_back
 from .robot import Robot
 
+
 def chunk_size(n_joints: int) -> int:
     """Samples per ``lax.map`` chunk. The intermediates grow as n^2 per sample; measured
     on a 2-core CPU (benchmarks/regressor.py, 10,000 samples), 16 was fastest for 3

@@ -1,0 +1,102 @@
+"""Beetle Swarm Optimisation (BSO): T. Wang, L. Yang, Q. Liu, "Beetle Swarm Optimization
+Algorithm: Theory and Application", arXiv:1808.00206 (2018); the paper's Eq. 10-13.
+
+Per iteration, for every beetle at once (the authors' demo code, NOTES_ON_THE_PAPER.md
+Sec. 3)::
+
+    xl = x + V d/2,  xr = x - V d/2                 # antennae, d = delta / c (Eq. 13)
+    xi = -delta V sign(f(xl) - f(xr))               # toward the better antenna (Eq. 12)
+    V  = clip(w V + c1 r1 (pbest - x) + c2 r2 (g - x), -Vmax, Vmax)      (Eq. 11)
+    x  = clip(x + lam V + (1 - lam) xi, lower, upper)                    (Eq. 10)
+
+The authors' code uses ``+delta V sign(...)``, which moves toward the WORSE antenna when
+minimising; ``literal_sign=True`` restores it. With a linear fitness embedding (Eq. 17)
+the antennae cost no product with ``W``: ``W xl = W x + d/2 W V``.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .swarm import AbstractSwarm, evaluate, initial_state, update_bests
+
+
+class BSO(AbstractSwarm):
+    """Beetle swarm with a constant population. Defaults: the paper's Sec. 5.2."""
+
+    n_beetles: int = 50  # N
+    c1: float = 2.0  # cognitive coefficient
+    c2: float = 2.0  # social coefficient
+    w: float = 0.8  # inertia weight
+    lam: float = 0.9  # lambda: share of the velocity step vs the antenna step (Eq. 10)
+    delta: float = 0.05  # delta: antenna step size, constant (Eq. 12)
+    c: float = 2.0  # ratio of step size to antenna distance: d = delta / c (Eq. 13)
+    vmax_fraction: float = 0.5  # Vmax = vmax_fraction * (upper - lower)
+    literal_sign: bool = False  # True: the authors' sign, toward the worse antenna
+
+    @classmethod
+    def paper(cls) -> BSO:
+        """The paper's settings (Sec. 5.2): N = 50, c1 = c2 = 2, w = 0.8, lambda = 0.9,
+        delta = 0.05, c = 2; Vmax = 0.5 (ub - lb) as in the authors' code."""
+        return cls()
+
+    @property
+    def n_slots(self) -> int:
+        return self.n_beetles
+
+    def schedule(self, iterations: int) -> np.ndarray:
+        return np.full(iterations, self.n_beetles)
+
+    def check(self) -> None:
+        _check_common(self, self.n_beetles, "n_beetles")
+        if not 0.0 <= self.lam <= 1.0:
+            raise ValueError(f"lam must lie in [0, 1], got {self.lam}")
+        if self.delta <= 0 or self.c <= 0:
+            raise ValueError(f"delta and c must be > 0, got delta={self.delta}, c={self.c}")
+
+    def init(self, fitness, lower, upper, key):
+        return initial_state(fitness, lower, upper, key, self.n_slots,
+                             self.vmax_fraction * (upper - lower))
+
+    def beetle_step(self, fitness, s, lower, upper, key):
+        """Eq. 10-13 for every slot; returns the state with bests updated and the swarm's
+        global best (x, f) among the active slots."""
+        k1, k2 = jax.random.split(key)
+        d = self.delta / self.c
+        fl, bad_l = evaluate(fitness, s.ex + 0.5 * d * s.ev, s.active)
+        fr, bad_r = evaluate(fitness, s.ex - 0.5 * d * s.ev, s.active)
+        direction = jnp.nan_to_num(jnp.sign(fl - fr))  # inf - inf: no preference
+        if not self.literal_sign:
+            direction = -direction
+        xi = self.delta * s.v * direction[:, None]
+        vmax = self.vmax_fraction * (upper - lower)
+        r1 = jax.random.uniform(k1, s.x.shape, s.x.dtype)
+        r2 = jax.random.uniform(k2, s.x.shape, s.x.dtype)
+        v = self.w * s.v + self.c1 * r1 * (s.pbest_x - s.x) + self.c2 * r2 * (s.guide_x - s.x)
+        v = jnp.clip(v, -vmax, vmax)
+        x = jnp.clip(s.x + self.lam * v + (1.0 - self.lam) * xi, lower, upper)
+        ex, ev = fitness.embed(x), fitness.embed(v)
+        f, bad = evaluate(fitness, ex, s.active)
+        on = s.active[:, None]
+        n_active = jnp.sum(s.active, dtype=jnp.int32)
+        s = eqx.tree_at(
+            lambda s: (s.v, s.ev, s.n_evaluations, s.n_nonfinite), s,
+            (jnp.where(on, v, s.v), jnp.where(on, ev, s.ev), s.n_evaluations + 3 * n_active,
+             s.n_nonfinite + bad + bad_l + bad_r))
+        return update_bests(s, x, ex, f)
+
+    def step(self, fitness, s, t, iterations, lower, upper, key):
+        s, (gx, gf) = self.beetle_step(fitness, s, lower, upper, key)
+        return eqx.tree_at(lambda s: (s.guide_x, s.guide_f), s, (gx, gf))
+
+
+def _check_common(solver, n, name) -> None:
+    if not isinstance(n, (int, np.integer)) or n < 1:
+        raise ValueError(f"{name} must be an integer >= 1, got {n!r}")
+    if solver.vmax_fraction <= 0:
+        raise ValueError(f"vmax_fraction must be > 0, got {solver.vmax_fraction}")
+    if solver.c1 < 0 or solver.c2 < 0:
+        raise ValueError(f"c1 and c2 must be >= 0, got c1={solver.c1}, c2={solver.c2}")

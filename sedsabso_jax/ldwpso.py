@@ -1,0 +1,66 @@
+"""Linearly decreasing inertia weight PSO (LDWPSO): Y. Shi, R. Eberhart, "A modified
+particle swarm optimizer", IEEE ICEC 1998; "Empirical study of particle swarm
+optimization", CEC 1999. NOTES_ON_THE_PAPER.md Sec. 5::
+
+    w(t) = w_start - (w_start - w_end) t / (K - 1)
+    V = clip(w(t) V + c1 r1 (pbest - x) + c2 r2 (g - x), -Vmax, Vmax)
+    x = clip(x + V, lower, upper)
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .bso import _check_common
+from .swarm import AbstractSwarm, evaluate, initial_state, update_bests
+
+
+class LDWPSO(AbstractSwarm):
+    """PSO with inertia falling linearly from 0.9 to 0.4. Defaults: the paper's Sec. 5.2."""
+
+    n_particles: int = 50  # N
+    c1: float = 2.0  # cognitive coefficient
+    c2: float = 2.0  # social coefficient
+    w_start: float = 0.9  # inertia at the first iteration
+    w_end: float = 0.4  # inertia at the last iteration
+    vmax_fraction: float = 0.5  # Vmax = vmax_fraction * (upper - lower)
+
+    @classmethod
+    def paper(cls) -> LDWPSO:
+        """N = 50, c1 = c2 = 2, w from 0.9 to 0.4, Vmax = 0.5 (ub - lb)."""
+        return cls()
+
+    @property
+    def n_slots(self) -> int:
+        return self.n_particles
+
+    def schedule(self, iterations: int) -> np.ndarray:
+        return np.full(iterations, self.n_particles)
+
+    def check(self) -> None:
+        _check_common(self, self.n_particles, "n_particles")
+
+    def init(self, fitness, lower, upper, key):
+        return initial_state(fitness, lower, upper, key, self.n_slots,
+                             self.vmax_fraction * (upper - lower))
+
+    def step(self, fitness, s, t, iterations, lower, upper, key):
+        k1, k2 = jax.random.split(key)
+        w = self.w_start - (self.w_start - self.w_end) * t / max(iterations - 1, 1)
+        r1 = jax.random.uniform(k1, s.x.shape, s.x.dtype)
+        r2 = jax.random.uniform(k2, s.x.shape, s.x.dtype)
+        vmax = self.vmax_fraction * (upper - lower)
+        v = w * s.v + self.c1 * r1 * (s.pbest_x - s.x) + self.c2 * r2 * (s.guide_x - s.x)
+        v = jnp.clip(v, -vmax, vmax)
+        x = jnp.clip(s.x + v, lower, upper)
+        ex = fitness.embed(x)
+        f, bad = evaluate(fitness, ex, s.active)
+        s = eqx.tree_at(lambda s: (s.v, s.n_evaluations, s.n_nonfinite), s,
+                        (jnp.where(s.active[:, None], v, s.v),
+                         s.n_evaluations + jnp.sum(s.active, dtype=jnp.int32),
+                         s.n_nonfinite + bad))
+        s, (gx, gf) = update_bests(s, x, ex, f)
+        return eqx.tree_at(lambda s: (s.guide_x, s.guide_f), s, (gx, gf))

@@ -1,0 +1,274 @@
+"""Shared machinery of the swarms: state, population bookkeeping, the driver.
+
+A swarm is an immutable solver (an ``equinox.Module`` whose fields are its
+hyperparameters) with ``init`` and ``step``; :func:`minimise` runs any of them inside one
+jit-compiled function: ``lax.scan`` over iterations, the population evaluated at once
+(``vmap`` for a black-box fitness, one matrix product for Eq. 17), many runs by ``vmap``
+over PRNG keys, runs spread over devices with ``jax.sharding``.
+
+A variable population (SEDSABSO's Eq. 15-16) uses a fixed number of slots with an active
+mask; the iterations are split into phases of static, shrinking slot counts, so the work
+follows the active count while everything compiles once.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Bool, Float, Int
+
+from .fitness import as_fitness
+from .result import Result
+
+
+class SwarmState(eqx.Module):
+    """One run's population. Slots beyond the active count are frozen."""
+
+    x: Float[Array, "slots d"]
+    v: Float[Array, "slots d"]
+    ex: Float[Array, "slots m"]  # embed(x): W x for Eq. 17, x for a black box
+    ev: Float[Array, "slots m"]  # embed(v), used by the beetles' antennae
+    f: Float[Array, " slots"]
+    pbest_x: Float[Array, "slots d"]
+    pbest_f: Float[Array, " slots"]
+    active: Bool[Array, " slots"]
+    guide_x: Float[Array, " d"]  # global best that steers the velocities (SA guide)
+    guide_f: Float[Array, ""]
+    best_x: Float[Array, " d"]  # best point ever evaluated: what is reported
+    best_f: Float[Array, ""]
+    temperature: Float[Array, ""]
+    sa_accepted: Int[Array, ""]
+    n_evaluations: Int[Array, ""]
+    n_nonfinite: Int[Array, ""]
+
+
+def finite_or_inf(f):
+    """NaN or Inf fitness counts as +Inf, so it never becomes a best."""
+    return jnp.where(jnp.isfinite(f), f, jnp.inf)
+
+
+def evaluate(fitness, e, mask=None):
+    """Fitness from embeddings, non-finite values mapped to +Inf and counted."""
+    raw = fitness.value(e)
+    bad = ~jnp.isfinite(raw)
+    if mask is not None:
+        bad = bad & mask
+    return finite_or_inf(raw), jnp.sum(bad, dtype=jnp.int32)
+
+
+def initial_state(fitness, lower, upper, key, slots: int, vmax, temperature=0.0) -> SwarmState:
+    kx, kv = jax.random.split(key)
+    d = lower.shape[0]
+    x = lower + (upper - lower) * jax.random.uniform(kx, (slots, d), lower.dtype)
+    v = vmax * jax.random.uniform(kv, (slots, d), lower.dtype, -1.0, 1.0)
+    ex, ev = fitness.embed(x), fitness.embed(v)
+    f, bad = evaluate(fitness, ex)
+    i = jnp.argmin(f)
+    return SwarmState(
+        x=x, v=v, ex=ex, ev=ev, f=f, pbest_x=x, pbest_f=f,
+        active=jnp.ones(slots, bool), guide_x=x[i], guide_f=f[i], best_x=x[i], best_f=f[i],
+        temperature=jnp.asarray(temperature, lower.dtype), sa_accepted=jnp.int32(0),
+        n_evaluations=jnp.int32(slots), n_nonfinite=bad,
+    )
+
+
+def update_bests(state: SwarmState, x, ex, f) -> SwarmState:
+    """Personal bests of the active slots, then the swarm's global best."""
+    better = state.active & (f < state.pbest_f)
+    pbest_f = jnp.where(better, f, state.pbest_f)
+    pbest_x = jnp.where(better[:, None], x, state.pbest_x)
+    masked = jnp.where(state.active, pbest_f, jnp.inf)
+    i = jnp.argmin(masked)
+    improve_best = masked[i] < state.best_f
+    on = state.active[:, None]
+    return eqx.tree_at(
+        lambda s: (s.x, s.ex, s.f, s.pbest_x, s.pbest_f, s.best_x, s.best_f),
+        state,
+        (jnp.where(on, x, state.x), jnp.where(on, ex, state.ex),
+         jnp.where(state.active, f, state.f), pbest_x, pbest_f,
+         jnp.where(improve_best, pbest_x[i], state.best_x),
+         jnp.where(improve_best, masked[i], state.best_f)),
+    ), (pbest_x[i], masked[i])
+
+
+def set_active(state: SwarmState, n_active) -> SwarmState:
+    """Keep the ``n_active`` slots with the best personal bests (worst dropped first)."""
+    order = jnp.argsort(jnp.where(state.active, state.pbest_f, jnp.inf))
+    rank = jnp.empty_like(order).at[order].set(jnp.arange(order.shape[0]))
+    return eqx.tree_at(lambda s: s.active, state, rank < n_active)
+
+
+def shrink(state: SwarmState, slots: int) -> SwarmState:
+    """Reorder slots best first (active before inactive) and keep the first ``slots``."""
+    order = jnp.argsort(jnp.where(state.active, state.pbest_f, jnp.inf))[:slots]
+    per_slot = ("x", "v", "ex", "ev", "f", "pbest_x", "pbest_f", "active")
+    return eqx.tree_at(lambda s: [getattr(s, k) for k in per_slot], state,
+                       [getattr(state, k)[order] for k in per_slot])
+
+
+def phases(schedule: np.ndarray, n_phases: int):
+    """Split iterations into at most ``n_phases`` runs of iterations with a static slot
+    count each: the largest active count inside the phase (N(t) never grows)."""
+    K = len(schedule)
+    bounds = sorted({round(k * K / n_phases) for k in range(n_phases)} | {K})
+    return [(a, b, int(schedule[a:b].max())) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
+
+
+class AbstractSwarm(eqx.Module):
+    """Interface of a swarm: ``schedule``, ``init``, ``step`` (see :func:`minimise`)."""
+
+    def schedule(self, iterations: int) -> np.ndarray:
+        """Active population per iteration (static)."""
+        raise NotImplementedError
+
+    @property
+    def n_slots(self) -> int:
+        raise NotImplementedError
+
+    @property
+    def n_phases(self) -> int:
+        return 1
+
+    def init(self, fitness, lower, upper, key) -> SwarmState:
+        raise NotImplementedError
+
+    def step(self, fitness, state, t, iterations, lower, upper, key) -> SwarmState:
+        raise NotImplementedError
+
+    def check(self) -> None:
+        """Raise ValueError on bad hyperparameters (called before anything compiles)."""
+
+
+def _single_run(solver: AbstractSwarm, fitness, lower, upper, key, iterations: int):
+    sched = solver.schedule(iterations)
+    key, k0 = jax.random.split(key)
+    state = set_active(solver.init(fitness, lower, upper, k0), int(sched[0]))
+    hist_f, hist_n = [], []
+    for a, b, slots in phases(sched, solver.n_phases):
+        state = shrink(state, slots)
+        n_t = jnp.asarray(sched[a:b], jnp.int32)
+
+        def body(carry, inp):
+            state, key = carry
+            t, n_active = inp
+            key, sub = jax.random.split(key)
+            state = set_active(state, n_active)
+            state = solver.step(fitness, state, t, iterations, lower, upper, sub)
+            return (state, key), (state.best_f, jnp.sum(state.active, dtype=jnp.int32))
+
+        (state, key), (fh, nh) = jax.lax.scan(body, (state, key), (jnp.arange(a, b), n_t))
+        hist_f.append(fh)
+        hist_n.append(nh)
+    return (state.best_x, state.best_f, jnp.concatenate(hist_f), jnp.concatenate(hist_n),
+            state.sa_accepted, state.n_evaluations, state.n_nonfinite)
+
+
+_COMPILED: dict = {}
+
+
+def _compiled(fn, static, *args):
+    """AOT-compile ``fn`` once per (static configuration, argument structure); return the
+    executable and the seconds spent compiling (0 when reused)."""
+    leaves, treedef = jax.tree_util.tree_flatten(args)
+    spec = tuple((jnp.shape(x), jnp.result_type(x), getattr(x, "sharding", None))
+                 for x in leaves)
+    key = (fn, static, treedef, spec)
+    if key in _COMPILED:
+        return _COMPILED[key], 0.0
+    t0 = time.perf_counter()
+    exe = jax.jit(fn, static_argnums=(0,)).lower(static, *args).compile()
+    _COMPILED[key] = exe
+    return exe, time.perf_counter() - t0
+
+
+def _run_many(static, solver_dyn, fitness, lower, upper, keys):
+    solver_static, iterations = static
+    solver = eqx.combine(solver_dyn, solver_static)
+    return jax.vmap(lambda k: _single_run(solver, fitness, lower, upper, k, iterations))(keys)
+
+
+def _run_one(static, solver_dyn, fitness, lower, upper, key):
+    solver_static, iterations = static
+    solver = eqx.combine(solver_dyn, solver_static)
+    return _single_run(solver, fitness, lower, upper, key, iterations)
+
+
+def check_bounds(lower, upper, dim=None):
+    lower = np.asarray(lower, dtype=float)
+    upper = np.asarray(upper, dtype=float)
+    if lower.ndim != 1 or upper.shape != lower.shape:
+        raise ValueError(f"bounds must be two 1-D arrays of one length; got lower {lower.shape}, "
+                         f"upper {upper.shape}")
+    if dim is not None and lower.shape[0] != dim:
+        raise ValueError(f"bounds have length {lower.shape[0]}, the fitness has {dim} parameters")
+    if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
+        raise ValueError("bounds must be finite")
+    bad = np.flatnonzero(lower >= upper)
+    if bad.size:
+        i = int(bad[0])
+        raise ValueError(f"bounds need lower < upper; at index {i}: lower {lower[i]:g} >= "
+                         f"upper {upper[i]:g} ({bad.size} such indices)")
+    return lower, upper
+
+
+def minimise(fitness, solver: AbstractSwarm, lower, upper, *, key, iterations: int = 600,
+             runs: int | None = None, args=None, dtype=jnp.float64, shard: bool = True) -> Result:
+    """Minimise ``fitness`` over the box ``[lower, upper]`` with a swarm.
+
+    ``fitness``: a callable ``f(x, args) -> scalar`` (evaluated under ``vmap``) or an
+    :class:`~sedsabso_jax.fitness.L1Residual` (the paper's Eq. 17, evaluated through
+    ``W x``). ``key``: a JAX PRNG key (``jax.random.key(seed)``); the same key gives the
+    same result. ``runs``: that many independent runs in one compiled call (``vmap`` over
+    keys split from ``key``), spread over the available devices when ``shard``.
+    ``dtype``: float64 or float32 for positions and the fitness data.
+    """
+    if not isinstance(solver, AbstractSwarm):
+        raise TypeError(f"solver must be SEDSABSO, BSO or LDWPSO, got {type(solver).__name__}")
+    if not isinstance(iterations, (int, np.integer)) or iterations < 1:
+        raise ValueError(f"iterations must be an integer >= 1, got {iterations!r}")
+    if runs is not None and (not isinstance(runs, (int, np.integer)) or runs < 1):
+        raise ValueError(f"runs must be an integer >= 1 or None, got {runs!r}")
+    solver.check()
+    fitness = as_fitness(fitness, args)
+    dim = getattr(fitness, "dim", None)
+    lower, upper = check_bounds(lower, upper, dim)
+    dtype = jnp.dtype(dtype)
+    if dtype not in (jnp.dtype(jnp.float32), jnp.dtype(jnp.float64)):
+        raise ValueError(f"dtype must be float32 or float64, got {dtype}")
+    cast = lambda a: a.astype(dtype) if eqx.is_inexact_array(a) else a  # noqa: E731
+    fitness = jax.tree.map(cast, fitness)
+    lo, hi = jnp.asarray(lower, dtype), jnp.asarray(upper, dtype)
+    dyn, static = eqx.partition(solver, eqx.is_array)
+    dyn = jax.tree.map(cast, dyn)
+    static_key = (static, int(iterations))
+    if runs is None:
+        exe, compile_s = _compiled(_run_one, static_key, dyn, fitness, lo, hi, key)
+        t0 = time.perf_counter()
+        out = jax.block_until_ready(exe(dyn, fitness, lo, hi, key))
+    else:
+        keys = jax.random.split(key, runs)
+        devices = jax.devices()
+        padded = runs
+        if shard and len(devices) > 1:
+            # pad the runs to a multiple of the device count; the extra runs are dropped
+            padded = math.ceil(runs / len(devices)) * len(devices)
+            if padded > runs:
+                extra = jax.random.split(jax.random.fold_in(key, 1), padded - runs)
+                keys = jnp.concatenate([keys, extra])
+            mesh = jax.sharding.Mesh(np.array(devices), ("runs",))
+            spec = jax.sharding.PartitionSpec("runs")
+            keys = jax.device_put(keys, jax.sharding.NamedSharding(mesh, spec))
+        exe, compile_s = _compiled(_run_many, static_key, dyn, fitness, lo, hi, keys)
+        t0 = time.perf_counter()
+        out = jax.block_until_ready(exe(dyn, fitness, lo, hi, keys))
+        out = tuple(o[:runs] for o in out)
+    run_s = time.perf_counter() - t0
+    x, f, hf, hn, sa, ne, nn = out
+    return Result(method=type(solver).__name__, x=x, f=f, history_f=hf, history_n=hn,
+                  sa_accepted=sa, n_evaluations=ne, n_nonfinite=nn, compile_s=compile_s,
+                  run_s=run_s)
