@@ -80,12 +80,10 @@ class BSO(AbstractSwarm):
         x = jnp.clip(s.x + self.lam * v + (1.0 - self.lam) * xi, lower, upper)
         ex, ev = fitness.embed(x), fitness.embed(v)
         f, bad = evaluate(fitness, ex, s.active)
-        on = s.active[:, None]
         n_active = jnp.sum(s.active, dtype=jnp.int32)
         s = eqx.tree_at(
             lambda s: (s.v, s.ev, s.n_evaluations, s.n_nonfinite), s,
-            (jnp.where(on, v, s.v), jnp.where(on, ev, s.ev), s.n_evaluations + 3 * n_active,
-             s.n_nonfinite + bad + bad_l + bad_r))
+            (v, ev, s.n_evaluations + 3 * n_active, s.n_nonfinite + bad + bad_l + bad_r))
         return update_bests(s, x, ex, f)
 
     def step(self, fitness, s, t, iterations, lower, upper, key):

@@ -59,7 +59,7 @@ class LDWPSO(AbstractSwarm):
         ex = fitness.embed(x)
         f, bad = evaluate(fitness, ex, s.active)
         s = eqx.tree_at(lambda s: (s.v, s.n_evaluations, s.n_nonfinite), s,
-                        (jnp.where(s.active[:, None], v, s.v),
+                        (v,
                          s.n_evaluations + jnp.sum(s.active, dtype=jnp.int32),
                          s.n_nonfinite + bad))
         s, (gx, gf) = update_bests(s, x, ex, f)

@@ -27,7 +27,9 @@ from .result import Result
 
 
 class SwarmState(eqx.Module):
-    """One run's population. Slots beyond the active count are frozen."""
+    """One run's population. Inactive slots still move (masking them would copy the
+    large embedding arrays every iteration) but their personal bests are frozen and they
+    never return: only active slots' personal bests can become the best."""
 
     x: Float[Array, "slots d"]
     v: Float[Array, "slots d"]
@@ -85,12 +87,10 @@ def update_bests(state: SwarmState, x, ex, f) -> SwarmState:
     masked = jnp.where(state.active, pbest_f, jnp.inf)
     i = jnp.argmin(masked)
     improve_best = masked[i] < state.best_f
-    on = state.active[:, None]
     return eqx.tree_at(
         lambda s: (s.x, s.ex, s.f, s.pbest_x, s.pbest_f, s.best_x, s.best_f),
         state,
-        (jnp.where(on, x, state.x), jnp.where(on, ex, state.ex),
-         jnp.where(state.active, f, state.f), pbest_x, pbest_f,
+        (x, ex, f, pbest_x, pbest_f,
          jnp.where(improve_best, pbest_x[i], state.best_x),
          jnp.where(improve_best, masked[i], state.best_f)),
     ), (pbest_x[i], masked[i])

@@ -67,10 +67,12 @@ def test_readme_commands_match_ci():
     assert test_command in ci
 
 
-def test_readme_example_runs():
-    """The README's quick example executes as written."""
+def test_readme_examples_run():
+    """The README's Python examples execute as written, in order."""
     readme = (ROOT / "README.md").read_text()
-    example = re.findall(r"```python\n(.*?)```", readme, flags=re.S)[0]
     namespace: dict = {}
-    exec(compile(example, "README.md", "exec"), namespace)  # noqa: S102
+    for example in re.findall(r"```python\n(.*?)```", readme, flags=re.S):
+        exec(compile(example, "README.md", "exec"), namespace)  # noqa: S102
     assert namespace["Y"].shape == (1000, 3, 36)
+    assert namespace["r"].x.shape == (10, 21)
+    assert float(namespace["floor"].f) <= float(namespace["r"].f.min())

@@ -1,0 +1,139 @@
+"""The paper's identification problem: SEDSABSO, BSO and LDWPSO against the baselines
+and pyswarms, same process, same fitness (Eq. 17), same budget.
+
+RS010N (3 joints, 21 base parameters), 1000 random states (seed 0), noise-free torques
+from the paper's Table 2, search box ``true +- max(10 % |true|, 0.1)`` (the paper's own
+scenario: a box around the true values), 600 iterations, the paper's settings. Per swarm:
+compile time apart; one run timed on its own after compilation (median of 3 seeds),
+float64 and float32; 10 runs batched in one compiled call; mean final fitness and mean
+largest absolute base-parameter error over the 10 runs. Also: BSO with the authors'
+literal sign, all three with Vmax = 0.1 (ub - lb), OLS / LM / GN / L1-LP, and pyswarms'
+GlobalBestPSO (50 particles, w = 0.8, c1 = c2 = 2, numpy fitness over the swarm).
+
+    python benchmarks/swarms.py [--json out.json] [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+import sedsabso_jax as sj
+from sedsabso_jax import baselines
+
+
+def problem(samples=1000, seed=0, box=0.1):
+    base = sj.base_parameters(sj.robots.rs010n())
+    rng = np.random.default_rng(seed)
+    q = rng.uniform(-np.pi, np.pi, (samples, 3))
+    qd, qdd = rng.standard_normal((2, samples, 3))
+    true = np.asarray(base.values)
+    tau = np.asarray(base.regressor(q, qd, qdd)) @ true
+    half = np.maximum(box * np.abs(true), box)
+    return sj.L1Residual.from_base(base, q, qd, qdd, tau), true - half, true + half, true
+
+
+def swarm_row(name, solver, prob, lo, hi, true, iterations, dtype, runs=10):
+    first = sj.minimise(prob, solver, lo, hi, key=jax.random.key(0), iterations=iterations,
+                        dtype=dtype)
+    singles = [sj.minimise(prob, solver, lo, hi, key=jax.random.key(s), iterations=iterations,
+                           dtype=dtype).run_s for s in (1, 2, 3)]
+    sj.minimise(prob, solver, lo, hi, key=jax.random.key(0), iterations=iterations,
+                dtype=dtype, runs=runs)  # compile the batched call
+    many = sj.minimise(prob, solver, lo, hi, key=jax.random.key(7), iterations=iterations,
+                       dtype=dtype, runs=runs)
+    x = np.asarray(many.x, dtype=float)
+    return {
+        "method": name, "dtype": jnp.dtype(dtype).name, "compile_s": first.compile_s,
+        "time_per_run_s": float(np.median(singles)), "batched_runs": runs,
+        "batched_time_s": many.run_s, "fitness_mean": float(np.mean(many.f)),
+        "fitness_std": float(np.std(many.f)),
+        "max_abs_error_mean": float(np.abs(x - true).max(-1).mean()),
+        "sa_accepted_mean": float(np.mean(many.sa_accepted)),
+    }
+
+
+def pyswarms_row(prob, lo, hi, true, iterations):
+    import pyswarms as ps
+
+    W, tau = np.asarray(prob.W), np.asarray(prob.tau)
+    f = lambda X: np.abs(X @ W.T - tau).sum(1)  # noqa: E731
+    times, fs, errs = [], [], []
+    for seed in range(3):
+        np.random.seed(seed)
+        opt = ps.single.GlobalBestPSO(n_particles=50, dimensions=len(lo),
+                                      options={"c1": 2.0, "c2": 2.0, "w": 0.8}, bounds=(lo, hi))
+        t0 = time.perf_counter()
+        cost, pos = opt.optimize(f, iters=iterations, verbose=False)
+        times.append(time.perf_counter() - t0)
+        fs.append(cost)
+        errs.append(np.abs(pos - true).max())
+    return {"method": "pyswarms GlobalBestPSO", "dtype": "float64", "compile_s": 0.0,
+            "time_per_run_s": float(np.median(times)), "fitness_mean": float(np.mean(fs)),
+            "max_abs_error_mean": float(np.mean(errs))}
+
+
+def baseline_rows(prob, true):
+    rows = []
+    for name, fn in (("OLS", baselines.ols), ("LM", lambda p: baselines.least_squares(p, "LM")),
+                     ("GN", lambda p: baselines.least_squares(p, "GN")),
+                     ("L1-LP", baselines.l1_optimum)):
+        first = fn(prob)
+        r = fn(prob)  # timed after compilation
+        rows.append({"method": name, "dtype": "float64", "compile_s": first.compile_s,
+                     "time_per_run_s": r.run_s, "fitness_mean": float(r.f),
+                     "max_abs_error_mean": float(np.abs(np.asarray(r.x) - true).max())})
+    return rows
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--json", default=None)
+    parser.add_argument("--quick", action="store_true", help="100 iterations, float64 only")
+    args = parser.parse_args()
+    iterations = 100 if args.quick else 600
+    prob, lo, hi, true = problem()
+    rows = []
+    dtypes = (jnp.float64,) if args.quick else (jnp.float64, jnp.float32)
+    paper = {"SEDSABSO": sj.SEDSABSO.paper(), "BSO": sj.BSO.paper(), "LDWPSO": sj.LDWPSO.paper()}
+    for dtype in dtypes:
+        for name, solver in paper.items():
+            rows.append(swarm_row(name, solver, prob, lo, hi, true, iterations, dtype))
+    if not args.quick:
+        rows.append(swarm_row("BSO literal sign", sj.BSO(literal_sign=True), prob, lo, hi,
+                              true, iterations, jnp.float64))
+        for name, solver in (("SEDSABSO Vmax 0.1", sj.SEDSABSO(vmax_fraction=0.1)),
+                             ("BSO Vmax 0.1", sj.BSO(vmax_fraction=0.1)),
+                             ("LDWPSO Vmax 0.1", sj.LDWPSO(vmax_fraction=0.1))):
+            rows.append(swarm_row(name, solver, prob, lo, hi, true, iterations, jnp.float64))
+    rows += baseline_rows(prob, true)
+    try:
+        rows.append(pyswarms_row(prob, lo, hi, true, iterations))
+    except ImportError:
+        print("pyswarms not installed: pip install -e '.[bench]'")
+    floor = next(r["fitness_mean"] for r in rows if r["method"] == "L1-LP")
+    print(f"RS010N, 1000 samples, 21 base parameters, {iterations} iterations, "
+          f"device {jax.devices()[0].platform}; L1 floor f = {floor:.3g}")
+    print(f"{'method':24s} {'dtype':7s} {'compile_s':>9s} {'run_s':>7s} {'10 runs_s':>9s} "
+          f"{'f mean':>9s} {'max|err|':>8s}")
+    for r in rows:
+        batched = f"{r['batched_time_s']:9.2f}" if "batched_time_s" in r else f"{'':9s}"
+        print(f"{r['method']:24s} {r['dtype']:7s} {r['compile_s']:9.2f} {r['time_per_run_s']:7.3f} "
+              f"{batched} {r['fitness_mean']:9.3g} {r['max_abs_error_mean']:8.3g}")
+    by = {(r["method"], r["dtype"]): r for r in rows}
+    if ("SEDSABSO", "float64") in by:
+        ratio = by["SEDSABSO", "float64"]["time_per_run_s"] / by["BSO", "float64"]["time_per_run_s"]
+        print(f"SEDSABSO / BSO time per run (float64): {ratio:.2f}")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump({"device": str(jax.devices()[0]), "iterations": iterations,
+                       "l1_floor": floor, "rows": rows}, fh, indent=2)
+
+
+if __name__ == "__main__":
+    main()
