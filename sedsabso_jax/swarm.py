@@ -79,8 +79,9 @@ def initial_state(fitness, lower, upper, key, slots: int, vmax, temperature=0.0)
     )
 
 
-def update_bests(state: SwarmState, x, ex, f) -> SwarmState:
-    """Personal bests of the active slots, then the swarm's global best."""
+def update_bests(state: SwarmState, x, ex, f):
+    """Take the new positions; update the active slots' personal bests and the best ever.
+    Returns the state and the swarm's global best ``(x, f)`` among the active slots."""
     better = state.active & (f < state.pbest_f)
     pbest_f = jnp.where(better, f, state.pbest_f)
     pbest_x = jnp.where(better[:, None], x, state.pbest_x)
