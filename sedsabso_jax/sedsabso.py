@@ -1,16 +1,18 @@
 """SEDSABSO: BSO with simulated annealing on the global best and an exponentially
 shrinking population, the paper's Sec. 4.2 (Eq. 14-16).
 
-Each iteration runs BSO's update (:mod:`sedsabso_jax.bso`), then ``q`` times (Eq. 14)::
+Each iteration runs BSO's update (:mod:`sedsabso_jax.bso`), then ``q`` simulated-annealing
+trials on the swarm's global best ``P_g`` (Eq. 14, NOTES_ON_THE_PAPER.md Sec. 4)::
 
-    cand = clip(g (1 + s r), lower, upper)        # r ~ U(0, 1) per dimension, s = 1: paper
-    accept as the guide if min(1, exp(-(f(cand) - f(g)) / T)) > U(0, 1)   # Metropolis
+    cand_k = clip(P_g (1 + s r_k), lower, upper)      # r_k ~ U(0, 1) per dimension; s = 1
+    guide <- cand_k  if  min(1, exp(-(f(cand_k) - f(guide)) / T)) > U(0, 1)   # Metropolis
 
-and ``T <- decay T``. The guide ``g`` steers the velocities; it starts each iteration as
-the better of itself and the swarm's best personal best. The best point ever evaluated is
-kept apart and is what is reported: an accepted worse guide never replaces it
-(NOTES_ON_THE_PAPER.md Sec. 4). Candidates are clipped to the search box (the paper
-leaves this open).
+for k = 1..q in turn, then ``T <- decay T``. The guide steers the velocities (Eq. 11's
+``g``); it starts each iteration as the better of itself and ``P_g``. The best point ever
+evaluated is kept apart and is what is reported: an accepted worse guide never replaces
+it. All q candidates perturb the same ``P_g``, so they are evaluated with one product;
+only the scalar Metropolis chain is sequential. Candidates are clipped to the search box
+(the paper leaves this open).
 
 Population (Eq. 15-16, decreasing form): ``N(t) = round(N_start exp(-(f_min + (f_max -
 f_min) t / (K - 1))))``, from 67 to 37 with the paper's numbers (mean about 50); when N
@@ -92,24 +94,30 @@ class SEDSABSO(BSO):
         key, sub = jax.random.split(key)
         s, (gx, gf) = self.beetle_step(fitness, s, lower, upper, sub)
         swarm_better = gf < s.guide_f
-        gx = jnp.where(swarm_better, gx, s.guide_x)
-        gf = jnp.where(swarm_better, gf, s.guide_f)
+        guide_x = jnp.where(swarm_better, gx, s.guide_x)
+        guide_f = jnp.where(swarm_better, gf, s.guide_f)
+        if self.q == 0:  # no annealing: BSO with a shrinking population
+            return eqx.tree_at(lambda s: (s.guide_x, s.guide_f, s.temperature), s,
+                               (guide_x, guide_f, s.temperature * self.decay))
+        kr, ku = jax.random.split(key)
+        r = jax.random.uniform(kr, (self.q,) + gx.shape, gx.dtype)
+        cand = jnp.clip(gx * (1.0 + self.perturbation_scale * r), lower, upper)  # Eq. 14
+        fc, bad = evaluate(fitness, fitness.embed(cand))
 
-        def anneal(k, carry):  # one Metropolis trial on the guide
-            gx, gf, bx, bf, accepted, bad = carry
-            kr, ku = jax.random.split(jax.random.fold_in(key, k))
-            r = jax.random.uniform(kr, gx.shape, gx.dtype)
-            cand = jnp.clip(gx * (1.0 + self.perturbation_scale * r), lower, upper)  # Eq. 14
-            fc, nb = evaluate(fitness, fitness.embed(cand[None]))
-            fc = fc[0]
-            accept = metropolis_accept(ku, fc, gf, s.temperature)
-            better = fc < bf
-            return (jnp.where(accept, cand, gx), jnp.where(accept, fc, gf),
-                    jnp.where(better, cand, bx), jnp.where(better, fc, bf),
-                    accepted + accept.astype(jnp.int32), bad + nb)
+        def trial(carry, inp):  # Metropolis against the current guide, in turn
+            guide_f, chosen = carry
+            k, f_k, key_k = inp
+            accept = metropolis_accept(key_k, f_k, guide_f, s.temperature)
+            return (jnp.where(accept, f_k, guide_f), jnp.where(accept, k, chosen)), accept
 
-        gx, gf, bx, bf, accepted, bad = jax.lax.fori_loop(
-            0, self.q, anneal, (gx, gf, s.best_x, s.best_f, s.sa_accepted, s.n_nonfinite))
+        trials = (jnp.arange(self.q, dtype=jnp.int32), fc, jax.random.split(ku, self.q))
+        (gf, chosen), accepts = jax.lax.scan(trial, (guide_f, jnp.int32(-1)), trials)
+        gx = jnp.where(chosen >= 0, cand[jnp.maximum(chosen, 0)], guide_x)
+        i = jnp.argmin(fc)
+        better = fc[i] < s.best_f
+        bx, bf = jnp.where(better, cand[i], s.best_x), jnp.where(better, fc[i], s.best_f)
+        accepted = s.sa_accepted + jnp.sum(accepts, dtype=jnp.int32)
+        bad = s.n_nonfinite + bad
         return eqx.tree_at(
             lambda s: (s.guide_x, s.guide_f, s.best_x, s.best_f, s.sa_accepted, s.n_nonfinite,
                        s.n_evaluations, s.temperature),
