@@ -35,7 +35,6 @@ class SwarmState(eqx.Module):
     v: Float[Array, "slots d"]
     ex: Float[Array, "slots m"]  # embed(x): W x for Eq. 17, x for a black box
     ev: Float[Array, "slots m"]  # embed(v), used by the beetles' antennae
-    f: Float[Array, " slots"]
     pbest_x: Float[Array, "slots d"]
     pbest_f: Float[Array, " slots"]
     active: Bool[Array, " slots"]
@@ -72,7 +71,7 @@ def initial_state(fitness, lower, upper, key, slots: int, vmax, temperature=0.0)
     f, bad = evaluate(fitness, ex)
     i = jnp.argmin(f)
     return SwarmState(
-        x=x, v=v, ex=ex, ev=ev, f=f, pbest_x=x, pbest_f=f,
+        x=x, v=v, ex=ex, ev=ev, pbest_x=x, pbest_f=f,
         active=jnp.ones(slots, bool), guide_x=x[i], guide_f=f[i], best_x=x[i], best_f=f[i],
         temperature=jnp.asarray(temperature, lower.dtype), sa_accepted=jnp.int32(0),
         n_evaluations=jnp.int32(slots), n_nonfinite=bad,
@@ -89,9 +88,9 @@ def update_bests(state: SwarmState, x, ex, f):
     i = jnp.argmin(masked)
     improve_best = masked[i] < state.best_f
     return eqx.tree_at(
-        lambda s: (s.x, s.ex, s.f, s.pbest_x, s.pbest_f, s.best_x, s.best_f),
+        lambda s: (s.x, s.ex, s.pbest_x, s.pbest_f, s.best_x, s.best_f),
         state,
-        (x, ex, f, pbest_x, pbest_f,
+        (x, ex, pbest_x, pbest_f,
          jnp.where(improve_best, pbest_x[i], state.best_x),
          jnp.where(improve_best, masked[i], state.best_f)),
     ), (pbest_x[i], masked[i])
@@ -107,7 +106,7 @@ def set_active(state: SwarmState, n_active) -> SwarmState:
 def shrink(state: SwarmState, slots: int) -> SwarmState:
     """Reorder slots best first (active before inactive) and keep the first ``slots``."""
     order = jnp.argsort(jnp.where(state.active, state.pbest_f, jnp.inf))[:slots]
-    per_slot = ("x", "v", "ex", "ev", "f", "pbest_x", "pbest_f", "active")
+    per_slot = ("x", "v", "ex", "ev", "pbest_x", "pbest_f", "active")
     return eqx.tree_at(lambda s: [getattr(s, k) for k in per_slot], state,
                        [getattr(state, k)[order] for k in per_slot])
 
@@ -187,16 +186,14 @@ def _compiled(fn, static, *args):
     return exe, time.perf_counter() - t0
 
 
-def _run_many(static, solver_dyn, fitness, lower, upper, keys):
-    solver_static, iterations = static
-    solver = eqx.combine(solver_dyn, solver_static)
-    return jax.vmap(lambda k: _single_run(solver, fitness, lower, upper, k, iterations))(keys)
-
-
 def _run_one(static, solver_dyn, fitness, lower, upper, key):
     solver_static, iterations = static
     solver = eqx.combine(solver_dyn, solver_static)
     return _single_run(solver, fitness, lower, upper, key, iterations)
+
+
+def _run_many(static, solver_dyn, fitness, lower, upper, keys):
+    return jax.vmap(lambda k: _run_one(static, solver_dyn, fitness, lower, upper, k))(keys)
 
 
 def check_bounds(lower, upper, dim=None):
