@@ -13,6 +13,8 @@ from importlib.metadata import PackageNotFoundError as _NotFound  # noqa: E402
 from importlib.metadata import version as _version  # noqa: E402
 
 from . import baselines as baselines  # noqa: E402
+from . import measurements as measurements  # noqa: E402
+from . import metrics as metrics  # noqa: E402
 from . import robots as robots  # noqa: E402
 from .base_parameters import BaseParameters as BaseParameters  # noqa: E402
 from .base_parameters import base_parameters as base_parameters  # noqa: E402
@@ -21,6 +23,13 @@ from .fitness import BlackBox as BlackBox  # noqa: E402
 from .fitness import L1Residual as L1Residual  # noqa: E402
 from .kinematics import forward_kinematics as forward_kinematics  # noqa: E402
 from .ldwpso import LDWPSO as LDWPSO  # noqa: E402
+from .measurements import Measurements as Measurements  # noqa: E402
+from .measurements import load_kuka_lwr4 as load_kuka_lwr4  # noqa: E402
+from .measurements import load_measurements as load_measurements  # noqa: E402
+from .measurements import simulate_measurements as simulate_measurements  # noqa: E402
+from .measurements import simulate_measurements_along as simulate_measurements_along  # noqa: E402,E501
+from .metrics import Metrics as Metrics  # noqa: E402
+from .metrics import validation_metrics as validation_metrics  # noqa: E402
 from .regressor import inverse_dynamics as inverse_dynamics  # noqa: E402
 from .regressor import regressor as regressor  # noqa: E402
 from .result import Result as Result  # noqa: E402
