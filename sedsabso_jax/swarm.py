@@ -214,17 +214,8 @@ def check_bounds(lower, upper, dim=None):
     return lower, upper
 
 
-def minimise(fitness, solver: AbstractSwarm, lower, upper, *, key, iterations: int = 600,
-             runs: int | None = None, args=None, dtype=jnp.float64, shard: bool = True) -> Result:
-    """Minimise ``fitness`` over the box ``[lower, upper]`` with a swarm.
-
-    ``fitness``: a callable ``f(x, args) -> scalar`` (evaluated under ``vmap``) or an
-    :class:`~sedsabso_jax.fitness.L1Residual` (the paper's Eq. 17, evaluated through
-    ``W x``). ``key``: a JAX PRNG key (``jax.random.key(seed)``); the same key gives the
-    same result. ``runs``: that many independent runs in one compiled call (``vmap`` over
-    keys split from ``key``), spread over the available devices when ``shard``.
-    ``dtype``: float64 or float32 for positions and the fitness data.
-    """
+def _prepare(fitness, solver, lower, upper, key, iterations, runs, args, dtype, shard):
+    """Check everything and build the compiled function's arguments (nothing runs)."""
     if not isinstance(solver, AbstractSwarm):
         raise TypeError(f"solver must be SEDSABSO, BSO or LDWPSO, got {type(solver).__name__}")
     if not isinstance(iterations, (int, np.integer)) or iterations < 1:
@@ -245,25 +236,50 @@ def minimise(fitness, solver: AbstractSwarm, lower, upper, *, key, iterations: i
     dyn = jax.tree.map(cast, dyn)
     static_key = (static, int(iterations))
     if runs is None:
-        exe, compile_s = _compiled(_run_one, static_key, dyn, fitness, lo, hi, key)
-        t0 = time.perf_counter()
-        out = jax.block_until_ready(exe(dyn, fitness, lo, hi, key))
-    else:
-        keys = jax.random.split(key, runs)
-        devices = jax.devices()
-        padded = runs
-        if shard and len(devices) > 1:
-            # pad the runs to a multiple of the device count; the extra runs are dropped
-            padded = math.ceil(runs / len(devices)) * len(devices)
-            if padded > runs:
-                extra = jax.random.split(jax.random.fold_in(key, 1), padded - runs)
-                keys = jnp.concatenate([keys, extra])
-            mesh = jax.sharding.Mesh(np.array(devices), ("runs",))
-            spec = jax.sharding.PartitionSpec("runs")
-            keys = jax.device_put(keys, jax.sharding.NamedSharding(mesh, spec))
-        exe, compile_s = _compiled(_run_many, static_key, dyn, fitness, lo, hi, keys)
-        t0 = time.perf_counter()
-        out = jax.block_until_ready(exe(dyn, fitness, lo, hi, keys))
+        return _run_one, static_key, (dyn, fitness, lo, hi, key)
+    keys = jax.random.split(key, runs)
+    devices = jax.devices()
+    if shard and len(devices) > 1:
+        # pad the runs to a multiple of the device count; the extra runs are dropped
+        padded = math.ceil(runs / len(devices)) * len(devices)
+        if padded > runs:
+            extra = jax.random.split(jax.random.fold_in(key, 1), padded - runs)
+            keys = jnp.concatenate([keys, extra])
+        mesh = jax.sharding.Mesh(np.array(devices), ("runs",))
+        spec = jax.sharding.PartitionSpec("runs")
+        keys = jax.device_put(keys, jax.sharding.NamedSharding(mesh, spec))
+    return _run_many, static_key, (dyn, fitness, lo, hi, keys)
+
+
+def precompile(fitness, solver: AbstractSwarm, lower, upper, *, key, iterations: int = 600,
+               runs: int | None = None, args=None, dtype=jnp.float64,
+               shard: bool = True) -> float:
+    """Compile what :func:`minimise` with the same arguments would run, without running
+    it; return the seconds spent (0 if already compiled). Only shapes and dtypes matter,
+    so placeholder data of the right shape will do. Safe to call from several threads:
+    compiling two configurations at once uses two cores."""
+    fn, static_key, call_args = _prepare(fitness, solver, lower, upper, key, iterations, runs,
+                                         args, dtype, shard)
+    return _compiled(fn, static_key, *call_args)[1]
+
+
+def minimise(fitness, solver: AbstractSwarm, lower, upper, *, key, iterations: int = 600,
+             runs: int | None = None, args=None, dtype=jnp.float64, shard: bool = True) -> Result:
+    """Minimise ``fitness`` over the box ``[lower, upper]`` with a swarm.
+
+    ``fitness``: a callable ``f(x, args) -> scalar`` (evaluated under ``vmap``) or an
+    :class:`~sedsabso_jax.fitness.L1Residual` (the paper's Eq. 17, evaluated through
+    ``W x``). ``key``: a JAX PRNG key (``jax.random.key(seed)``); the same key gives the
+    same result. ``runs``: that many independent runs in one compiled call (``vmap`` over
+    keys split from ``key``), spread over the available devices when ``shard``.
+    ``dtype``: float64 or float32 for positions and the fitness data.
+    """
+    fn, static_key, call_args = _prepare(fitness, solver, lower, upper, key, iterations, runs,
+                                         args, dtype, shard)
+    exe, compile_s = _compiled(fn, static_key, *call_args)
+    t0 = time.perf_counter()
+    out = jax.block_until_ready(exe(*call_args))
+    if runs is not None:
         out = tuple(o[:runs] for o in out)
     run_s = time.perf_counter() - t0
     x, f, hf, hn, sa, ne, nn = out

@@ -1,0 +1,118 @@
+"""``sedsabso-jax reproduce`` end to end on a small budget: files, schema, honesty checks."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import matplotlib.image
+import numpy as np
+import pytest
+
+from sedsabso_jax import cli, experiment
+
+SMALL = ["--runs", "2", "--iterations", "30", "--samples", "200", "--design-iterations", "5"]
+FILES = ("table4.md", "table5.md", "fig5_population.png", "fig6_convergence.png",
+         "results.json")
+
+
+@pytest.fixture(scope="module")
+def reproduced(tmp_path_factory):
+    out = tmp_path_factory.mktemp("reproduce")
+    code = cli.main(["reproduce", *SMALL, "--out", str(out / "res"),
+                     "--json", str(out / "copy.json")])
+    assert code == 0
+    return out
+
+
+def test_writes_every_file(reproduced):
+    for name in FILES:
+        path = reproduced / "res" / name
+        assert path.is_file() and path.stat().st_size > 500, name
+    assert (reproduced / "copy.json").read_text() == (reproduced / "res" / "results.json"
+                                                      ).read_text()
+    assert not [p for p in os.listdir(reproduced / "res") if p.endswith(".tmp")]
+
+
+def test_results_schema_and_numbers(reproduced):
+    res = json.loads((reproduced / "res" / "results.json").read_text())
+    assert res["schema"] == experiment.SCHEMA
+    s = res["settings"]
+    for key in ("runs", "iterations", "samples", "noise", "scenario", "seed", "dtype",
+                "device", "search_box", "excitation"):
+        assert key in s, key
+    assert (s["runs"], s["iterations"], s["samples"]) == (2, 30, 200)
+    names, true = res["base_parameters"]["names"], np.array(res["base_parameters"]["true"])
+    assert len(names) == len(true) == 21
+    lower, upper = (np.array(s["search_box"][k]) for k in ("lower", "upper"))
+    assert np.all(lower < true) and np.all(true < upper)  # paper scenario: box around truth
+    algos = res["algorithms"]
+    assert set(algos) == {"SEDSABSO", "BSO", "LDWPSO", "OLS", "LM", "L1-LP"}
+    for name in ("SEDSABSO", "BSO", "LDWPSO"):
+        a = algos[name]
+        for key in ("fitness_mean", "fitness_std", "time_mean_s", "batched_time_s",
+                    "max_abs_error", "params_mean", "history_median"):
+            assert key in a, (name, key)
+        assert len(a["fitness_runs"]) == 2 and len(a["history_median"]) == 30
+        hist = np.array(a["history_median"])
+        assert np.all(np.diff(hist) <= 0) and hist[-1] < hist[0]  # best-so-far falls
+        assert a["time_mean_s"] > 0 and a["batched_time_s"] > 0
+        # the swarms cannot beat the exact L1 optimum
+        assert a["fitness_mean"] >= algos["L1-LP"]["fitness_mean"] * (1 - 1e-9)
+    # noise-free data: least squares and the LP recover the parameters
+    for name in ("OLS", "LM", "L1-LP"):
+        assert algos[name]["max_abs_error"] < 1e-6, name
+    assert s["excitation"]["cond"] < 1e3
+
+
+def test_tables_put_the_paper_beside_ours(reproduced):
+    t4 = (reproduced / "res" / "table4.md").read_text()
+    assert "paper's fitness mean" in t4 and "16.93" in t4  # SEDSABSO's published time
+    t5 = (reproduced / "res" / "table5.md").read_text()
+    assert "ZZ1R" in t5 and "paper's SEDSABSO" in t5 and "16.8" in t5
+    assert t5.count("\n| ") == 22  # header + 21 base parameters
+
+
+def test_figures_are_images(reproduced):
+    for name in ("fig5_population.png", "fig6_convergence.png"):
+        img = matplotlib.image.imread(reproduced / "res" / name)
+        assert img.shape[0] > 300 and img.shape[1] > 500
+        assert img[..., :3].std() > 0.05  # not blank
+
+
+def test_same_seed_same_numbers(reproduced, tmp_path):
+    assert cli.main(["reproduce", *SMALL, "--out", str(tmp_path)]) == 0
+    a = json.loads((reproduced / "res" / "results.json").read_text())["algorithms"]
+    b = json.loads((tmp_path / "results.json").read_text())["algorithms"]
+    for name in a:
+        assert a[name]["params_mean"] == b[name]["params_mean"], name
+        assert a[name]["fitness_runs"] == b[name]["fitness_runs"], name
+
+
+def _status(argv) -> int:
+    """Exit status of the command line, whether argparse exits or main returns."""
+    try:
+        return cli.main(argv)
+    except SystemExit as exit_:
+        return exit_.code
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--runs", "0"], "expected an integer >= 1, got 0"),
+    (["--noise", "-1"], "expected a finite number >= 0"),
+    (["--noise", "nan"], "expected a finite number >= 0"),
+    (["--scenario", "magic"], "invalid choice: 'magic'"),
+    (["--samples", "10"], "samples must be >= 30"),
+])
+def test_bad_arguments_are_one_line(argv, message, tmp_path, capsys):
+    status = _status(["reproduce", *argv, "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert status == 2 and message in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_unwritable_json_fails_before_running(tmp_path, capsys):
+    status = _status(["reproduce", *SMALL, "--out", str(tmp_path / "out"),
+                      "--json", str(tmp_path / "missing" / "r.json")])
+    assert status == 2 and "no such directory" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
