@@ -11,12 +11,18 @@ result files are written atomically, so a failed run leaves none.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 import time
 import warnings
 
 BUILTIN_ROBOTS = ("rs010n", "kuka_lwr4")
+#: ``identify``'s default estimator and friction model: the combination that validates
+#: best on held-out real data in ``benchmarks/kuka_real.py`` (README, "Real robot").
+DEFAULT_METHOD = "WLS"
+DEFAULT_FRICTION = "viscous-coulomb+offset"
+DEFAULT_METHOD_WHY = "best held-out NRMS on the KUKA LWR4+ data"
 
 
 def _load_robot(spec: str, tip: str | None):
@@ -31,6 +37,20 @@ def _load_robot(spec: str, tip: str | None):
     if not os.path.isfile(spec):
         raise ValueError(f"--robot: no such file {spec!r}")
     return robots.from_urdf(spec, tip=tip)
+
+
+def _torque_limits(spec: str, robot):
+    """Torque limits (URDF efforts) of the robot's joints, or None when unknown."""
+    import numpy as np
+
+    from .excitation import joint_limits_from_urdf
+    from .robots import KUKA_LWR4_URDF
+
+    if spec == "rs010n":
+        return None
+    with KUKA_LWR4_URDF() if spec == "kuka_lwr4" else contextlib.nullcontext(spec) as path:
+        tau_max = np.asarray(joint_limits_from_urdf(path, robot).tau_max, dtype=float)
+    return tau_max if np.all(np.isfinite(tau_max) & (tau_max > 0)) else None
 
 
 def base_parameter_table(robot, *, paper_columns: bool = False) -> str:
@@ -118,6 +138,16 @@ def _non_negative_int(text: str) -> int:
     return value
 
 
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text}")
+    return value
+
+
 def _non_negative_float(text: str) -> float:
     try:
         value = float(text)
@@ -141,6 +171,87 @@ def _cmd_reproduce(args) -> None:
     written = report.write_outputs(exp, args.out, args.json)
     print(report.table4(exp.results))
     print("written: " + ", ".join(written))
+
+
+def _cmd_identify(args) -> None:
+    import numpy as np
+
+    from . import report
+    from ._io import write_json
+    from .identification import identify
+    from .measurements import load_measurements
+    from .metrics import validation_metrics
+
+    _check_writable(args.out, args.json)
+    robot = _load_robot(args.robot, args.tip)
+    load = dict(n_joints=robot.n_joints, cutoff_hz=args.cutoff_hz,
+                filter_torques=args.filter_torques, downsample=args.downsample)
+    data = load_measurements(args.data, **load)
+    held_out = load_measurements(args.validate, **load) if args.validate else None
+    limits = _torque_limits(args.robot, robot)
+    ident = identify(robot, data.q, data.qd, data.qdd, data.tau, method=args.method,
+                     friction=args.friction, physical=args.physical, limits=limits,
+                     runs=args.runs, iterations=args.iterations, seed=args.seed)
+    fit = validation_metrics(data.tau, ident.predict(data.q, data.qd, data.qdd), limits)
+    val = None if held_out is None else validation_metrics(
+        held_out.tau, ident.predict(held_out.q, held_out.qd, held_out.qdd), limits)
+    names = robot.joint_names
+    lines = [f"{robot.name}: {len(ident.names)} parameters identified by {ident.method} "
+             f"(friction {ident.model.friction}) from {data.n_samples} samples of "
+             f"{args.data}", "", "| # | parameter | value |", "|---|---|---|"]
+    lines += [f"| {i} | {n} | {v:.6g} |" for i, (n, v) in
+              enumerate(zip(ident.names, np.asarray(ident.values)), 1)]
+    lines += ["", "fit (identification data):", fit.table(names)]
+    if val is not None:
+        lines += ["", f"validation ({args.validate}, {held_out.n_samples} samples):",
+                  val.table(names)]
+    if limits is None:
+        lines += ["", "NRMS over torque limits: no limits known for this robot"]
+    document = {
+        "base_parameters": {"names": list(ident.names),
+                            "values": [float(v) for v in np.asarray(ident.values)]},
+        "fit": {**fit.as_dict(), "residual": ident.fit},
+        "validation": None if val is None else val.as_dict(),
+        "settings": {"robot": args.robot, "data": os.path.abspath(args.data),
+                     "validate": None if args.validate is None
+                     else os.path.abspath(args.validate),
+                     "torque_limits": None if limits is None else limits.tolist(),
+                     "loading": {**load, "data_info": _plain(data.info)},
+                     **ident.settings},
+    }
+    figures = {"torques_fit.png": (data, ident, "identification data")}
+    if held_out is not None:
+        figures["torques_validation.png"] = (held_out, ident, "held-out data")
+    rendered = {name: report.figure_torques(d.times, d.tau, ident.predict(d.q, d.qd, d.qdd),
+                                            names, f"{robot.name}, {ident.method}: {label}")
+                for name, (d, ident, label) in figures.items()}
+    written = []
+    if args.out is not None:
+        os.makedirs(args.out, exist_ok=True)
+        for name, fig in rendered.items():
+            report.save_figure(fig, os.path.join(args.out, name))
+            written.append(os.path.join(args.out, name))
+        write_json(os.path.join(args.out, "identification.json"), document)
+        written.append(os.path.join(args.out, "identification.json"))
+    else:
+        report.close_figures()
+    if args.json is not None:
+        write_json(args.json, document)
+        written.append(args.json)
+    print("\n".join(lines))
+    if written:
+        print("written: " + ", ".join(written))
+
+
+def _plain(value):
+    """JSON-ready copy of a small info dict (numpy scalars to floats)."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if hasattr(value, "item"):
+        return value.item()
+    return value
 
 
 def _check_writable(out_dir, json_path) -> None:
@@ -199,6 +310,42 @@ def build_parser() -> argparse.ArgumentParser:
                     help="directory for tables, figures and results.json (reproduce-results)")
     rp.add_argument("--json", default=None, help="also write results.json to this path")
     rp.set_defaults(func=_cmd_reproduce)
+
+    from .identification import FRICTION_TERMS, METHODS
+
+    ip = sub.add_parser(
+        "identify", help="identify a robot's base parameters from measured data",
+        description="Identify base parameters from joint data (.npz with keys positions, "
+        "velocities, accelerations, torques, times; or .csv with a header time,q1..,qd1..,"
+        "qdd1..,tau1..) and validate on held-out data.")
+    ip.add_argument("--robot", required=True,
+                    help=f"one of {', '.join(BUILTIN_ROBOTS)} or a .urdf file")
+    ip.add_argument("--tip", default=None, help="URDF tip link, for trees that branch")
+    ip.add_argument("--data", required=True, help="identification data (.npz or .csv)")
+    ip.add_argument("--validate", default=None, help="held-out data (.npz or .csv)")
+    ip.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD,
+                    help=f"estimator (default {DEFAULT_METHOD}: {DEFAULT_METHOD_WHY})")
+    ip.add_argument("--friction", default=DEFAULT_FRICTION,
+                    help=f"friction model: terms of {', '.join(FRICTION_TERMS)} joined by + "
+                    f"(default {DEFAULT_FRICTION})")
+    ip.add_argument("--physical", action="store_true",
+                    help="physically consistent parameters (OLS/WLS): positive-definite "
+                    "pseudo-inertia per link, friction >= 0")
+    ip.add_argument("--runs", type=_positive_int, default=1,
+                    help="swarm runs, the best kept (1)")
+    ip.add_argument("--iterations", type=_positive_int, default=600,
+                    help="swarm iterations (600)")
+    ip.add_argument("--seed", type=_non_negative_int, default=0, help="random seed (0)")
+    ip.add_argument("--cutoff-hz", type=_positive_float, default=None,
+                    help="low-pass cutoff where velocities/accelerations are derived or "
+                    "torques filtered (default 10 Hz)")
+    ip.add_argument("--filter-torques", action="store_true", help="low-pass the torques")
+    ip.add_argument("--downsample", type=_positive_int, default=1,
+                    help="keep every k-th sample after filtering (1)")
+    ip.add_argument("--json", default=None, help="write the results JSON to this path")
+    ip.add_argument("--out", default=None,
+                    help="directory for torque plots and identification.json")
+    ip.set_defaults(func=_cmd_identify)
     parser.set_defaults(func=_cmd_base_parameters, robot="rs010n", tip=None)
     return parser
 

@@ -162,6 +162,31 @@ def figure_convergence(history_f: dict, l1_floor: float):
     return fig
 
 
+def figure_torques(times, tau_measured, tau_predicted, joint_names, title: str):
+    """Measured against predicted torque per joint (one panel each), error in the legend."""
+    plt = _pyplot()
+    tau_measured, tau_predicted = np.asarray(tau_measured), np.asarray(tau_predicted)
+    n = tau_measured.shape[1]
+    t = np.asarray(times) - float(np.asarray(times)[0])
+    fig, axes = plt.subplots(n, 1, figsize=(8, 1.6 * n + 0.8), sharex=True,
+                             constrained_layout=True, squeeze=False)
+    for j, ax in enumerate(axes[:, 0]):
+        rms = float(np.sqrt(np.mean((tau_predicted[:, j] - tau_measured[:, j]) ** 2)))
+        ax.plot(t, tau_measured[:, j], color="0.3", lw=1.2, label="measured")
+        ax.plot(t, tau_predicted[:, j], color="tab:red", lw=1, ls="--",
+                label=f"predicted (RMS error {rms:.3g} N m)")
+        ax.set_ylabel(f"{joint_names[j]}\n[N m]")
+        ax.legend(loc="best", fontsize="small")
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle(title)
+    return fig
+
+
+def close_figures() -> None:
+    _pyplot().close("all")
+
+
 def save_figure(fig, path) -> None:
     """Save ``fig`` as PNG atomically and close it."""
     plt = _pyplot()

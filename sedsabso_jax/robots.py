@@ -130,8 +130,13 @@ def rs010n() -> Robot:
                     params=params, name="RS010N", joint_names=("J1", "J2", "J3"))
 
 
+def KUKA_LWR4_URDF():
+    """Context manager giving a file path of the vendored KUKA LWR4+ URDF."""
+    path = resources.files("sedsabso_jax") / "data" / "kuka_lwr4" / "kuka_lwr4.urdf"
+    return resources.as_file(path)
+
+
 def kuka_lwr4() -> Robot:
     """The KUKA LWR4+ from its URDF (FloBaRoID, LGPL-3.0), with its a-priori inertials."""
-    path = resources.files("sedsabso_jax") / "data" / "kuka_lwr4" / "kuka_lwr4.urdf"
-    with resources.as_file(path) as p:
+    with KUKA_LWR4_URDF() as p:
         return from_urdf(p)

@@ -1,0 +1,170 @@
+"""``sedsabso-jax identify``: real KUKA data end to end, simulated data, and a table of bad
+inputs (exit status 2, one readable line naming the file and field, nothing written)."""
+
+from __future__ import annotations
+
+import json
+import pickle
+
+import numpy as np
+import pytest
+
+import sedsabso_jax as sj
+from sedsabso_jax import cli
+
+
+def _status(argv) -> int:
+    try:
+        return cli.main(argv)
+    except SystemExit as exit_:
+        return exit_.code
+
+
+@pytest.fixture(scope="module")
+def rs010n_files(tmp_path_factory):
+    """Noise-free RS010N measurements along two different random smooth motions."""
+    d = tmp_path_factory.mktemp("rs010n")
+    robot = sj.robots.rs010n()
+    paths = []
+    for seed in (1, 2):
+        rng = np.random.default_rng(seed)
+        traj = sj.FourierTrajectory(rng.uniform(-0.3, 0.3, (3, 3)),
+                                    rng.uniform(-0.3, 0.3, (3, 3)), np.zeros(3), wf=0.6)
+        times = np.arange(400) / 40.0
+        data = sj.simulate_measurements_along(robot, traj, times)
+        paths.append(data.save(d / f"run{seed}.npz"))
+    return [str(p) for p in paths]
+
+
+def test_rs010n_noise_free_recovers_the_true_parameters(rs010n_files, tmp_path, capsys):
+    out = tmp_path / "out"
+    code = cli.main(["identify", "--robot", "rs010n", "--data", rs010n_files[0],
+                     "--validate", rs010n_files[1], "--method", "OLS",
+                     "--friction", "viscous-coulomb", "--out", str(out)])
+    assert code == 0
+    doc = json.loads((out / "identification.json").read_text())
+    base = sj.base_parameters(sj.robots.rs010n())
+    assert doc["base_parameters"]["names"] == list(base.names)
+    np.testing.assert_allclose(doc["base_parameters"]["values"], np.asarray(base.values),
+                               atol=1e-6)
+    assert doc["validation"]["nrms_limits_percent"] is None  # RS010N: no torque limits
+    assert max(doc["validation"]["relative_rms_percent"]) < 1e-6
+    assert (out / "torques_fit.png").is_file() and (out / "torques_validation.png").is_file()
+    text = capsys.readouterr().out
+    assert "ZZ1R" in text and "validation" in text
+
+
+def test_kuka_real_data_end_to_end(tmp_path, capsys):
+    """A slice of the real KUKA LWR4+ runs: the default method identifies on run 1 and
+    validates on run 2; the JSON has the documented keys and the held-out NRMS over the
+    torque limits is in the range the full files give (0.13-0.22 %)."""
+    m1 = sj.load_kuka_lwr4(1).slice(0, 2500)
+    m2 = sj.load_kuka_lwr4(2).slice(0, 1500)
+    p1, p2 = m1.save(tmp_path / "m1.npz"), m2.save(tmp_path / "m2.npz")
+    code = cli.main(["identify", "--robot", "kuka_lwr4", "--data", str(p1),
+                     "--validate", str(p2), "--json", str(tmp_path / "r.json")])
+    assert code == 0
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert set(doc) == {"base_parameters", "fit", "validation", "settings"}
+    assert len(doc["base_parameters"]["names"]) == len(doc["base_parameters"]["values"])
+    val = doc["validation"]
+    assert len(val["nrms_range_percent"]) == len(val["relative_rms_percent"]) == 7
+    assert 0.05 < val["nrms_limits_percent"] < 0.3
+    assert doc["settings"]["torque_limits"] == [176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0]
+    assert doc["settings"]["method"] == cli.DEFAULT_METHOD
+
+
+def _write_bad(tmp_path, case: str, good: str) -> str:
+    arrays = dict(np.load(good, allow_pickle=False))
+    path = tmp_path / f"{case}.npz"
+    if case == "nan":
+        arrays["torques"][5, 1] = np.nan
+    elif case == "missing-key":
+        del arrays["torques"]
+    elif case == "ragged":
+        arrays["velocities"] = arrays["velocities"][:-3]
+    elif case == "joints":
+        arrays = {k: (v[:, :2] if v.ndim == 2 else v) for k, v in arrays.items()}
+    elif case == "times":
+        arrays["times"][10] = arrays["times"][9]
+    elif case == "not-data":
+        path.write_text("this is not a data file\n")
+        return str(path)
+    elif case == "pickle":
+        arrays["torques"] = np.array([object()] * 3, dtype=object)
+        with open(path, "wb") as fh:
+            np.savez(fh, **arrays)
+        return str(path)
+    elif case == "empty":
+        path.write_bytes(b"")
+        return str(path)
+    np.savez(path, **arrays)
+    return str(path)
+
+
+@pytest.mark.parametrize("case, message", [
+    ("nan", "torques"),
+    ("missing-key", "torques"),
+    ("ragged", "velocities"),
+    ("joints", "3"),
+    ("times", "times"),
+    ("not-data", "not an .npz"),
+    ("pickle", "torques"),
+    ("empty", "npz"),
+])
+def test_bad_data_files(case, message, rs010n_files, tmp_path, capsys):
+    bad = _write_bad(tmp_path, case, rs010n_files[0])
+    out, js = tmp_path / "out", tmp_path / "r.json"
+    status = _status(["identify", "--robot", "rs010n", "--data", bad, "--out", str(out),
+                      "--json", str(js)])
+    err = capsys.readouterr().err
+    assert status == 2, err
+    assert len(err.strip().splitlines()) == 1, err
+    assert bad in err and message in err, err
+    assert "Traceback" not in err
+    assert not out.exists() and not js.exists()
+
+
+def test_pickled_payload_is_never_executed(rs010n_files, tmp_path, capsys):
+    marker = tmp_path / "executed"
+
+    class Payload:
+        def __reduce__(self):
+            return (open, (str(marker), "w"))
+
+    arrays = dict(np.load(rs010n_files[0], allow_pickle=False))
+    arrays["torques"] = np.array([Payload()], dtype=object)
+    path = tmp_path / "evil.npz"
+    np.savez(path, **arrays)
+    assert pickle.dumps(Payload())  # the payload is a real pickle
+    status = _status(["identify", "--robot", "rs010n", "--data", str(path)])
+    assert status == 2 and not marker.exists()
+    assert "evil.npz" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--method", "magic"], "invalid choice: 'magic'"),
+    (["--friction", "viscous-coulomb+glue"], "glue"),
+    (["--robot", "nowhere.urdf"], "no such file"),
+    (["--robot", "puma"], "--robot must be one of"),
+    (["--data", "missing.npz"], "missing.npz"),
+    (["--iterations", "0"], "expected an integer >= 1"),
+    (["--cutoff-hz", "-3"], "expected a finite number > 0"),
+])
+def test_bad_arguments(argv, message, rs010n_files, tmp_path, capsys):
+    args = {"--robot": "rs010n", "--data": rs010n_files[0], "--out": str(tmp_path / "o")}
+    for flag, value in zip(argv[::2], argv[1::2]):
+        args[flag] = value
+    flat = [x for kv in args.items() for x in kv]
+    status = _status(["identify", *flat])
+    err = capsys.readouterr().err
+    assert status == 2 and message in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "o").exists()
+
+
+def test_existing_result_survives_a_failed_run(rs010n_files, tmp_path, capsys):
+    js = tmp_path / "r.json"
+    js.write_text('{"previous": true}\n')
+    bad = _write_bad(tmp_path, "nan", rs010n_files[0])
+    assert _status(["identify", "--robot", "rs010n", "--data", bad, "--json", str(js)]) == 2
+    assert js.read_text() == '{"previous": true}\n'
