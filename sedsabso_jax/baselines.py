@@ -171,11 +171,14 @@ def l1_optimum(problem) -> Result:
     return _result("L1-LP", problem, x, res.nit, run_s=time.perf_counter() - t0)
 
 
-def gap_to_optimum(result_f, l1_f):
-    """Relative gap ``(f - f_opt) / max(f_opt, tiny)`` of a fitness ``result_f`` above the
-    L1 optimum ``l1_f`` (from :func:`l1_optimum`); 0 at the optimum, never meaningfully
-    negative (a slightly negative value is LP tolerance). Scalars give a float, arrays an
+def gap_to_optimum(result_f, l1_f, scale: float = 0.0):
+    """Relative gap ``(f - f_opt) / max(f_opt, 1e-9 scale)`` of a fitness ``result_f``
+    above the L1 optimum ``l1_f`` (from :func:`l1_optimum`); 0 at the optimum. ``scale``:
+    the size of the data, e.g. ``sum |tau|``: on noise-free data ``f_opt`` is rounding
+    noise (~1e-9) and a least-squares fit can land a little below it, which without a
+    scale reads as a gap near -1; with it such gaps are ~0. Scalars give a float, arrays an
     array (broadcast)."""
     f, f_opt = np.asarray(result_f, float), np.asarray(l1_f, float)
-    gap = (f - f_opt) / np.maximum(f_opt, np.finfo(float).tiny)
+    floor = np.maximum(f_opt, max(1e-9 * float(scale), np.finfo(float).tiny))
+    gap = (f - f_opt) / floor
     return float(gap) if gap.ndim == 0 else gap

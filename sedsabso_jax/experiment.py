@@ -205,7 +205,8 @@ def run(settings: Settings = Settings(), progress: Callable[[str, int, int], Non
         }
     l1_floor = algorithms["L1-LP"]["fitness_mean"]
     for entry in algorithms.values():
-        entry["gap_to_l1_optimum"] = baselines.gap_to_optimum(entry["fitness_mean"], l1_floor)
+        entry["gap_to_l1_optimum"] = baselines.gap_to_optimum(
+            entry["fitness_mean"], l1_floor, scale=float(np.abs(data.tau).sum()))
 
     progress("done", next(step), total)
     device = jax.devices()[0]

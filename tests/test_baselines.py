@@ -161,3 +161,10 @@ def test_bad_input(call, error, match):
     problem = L1Residual(np.ones((6, 4)) + np.eye(6, 4), np.ones(6))
     with pytest.raises(error, match=match):
         call(problem)
+
+
+def test_gap_with_scale_is_zero_for_rounding_level_differences():
+    # noise-free data: OLS may land below the LP's rounding-level optimum
+    assert bl.gap_to_optimum(1.3e-10, 1.3e-9) == pytest.approx(-0.9)
+    assert abs(bl.gap_to_optimum(1.3e-10, 1.3e-9, scale=1e4)) < 1e-3
+    assert bl.gap_to_optimum(3.0, 2.0, scale=1e4) == pytest.approx(0.5)  # real gaps unchanged
