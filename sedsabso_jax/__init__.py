@@ -26,6 +26,8 @@ from .excitation import design_excitation as design_excitation  # noqa: E402
 from .excitation import joint_limits_from_urdf as joint_limits_from_urdf  # noqa: E402
 from .fitness import BlackBox as BlackBox  # noqa: E402
 from .fitness import L1Residual as L1Residual  # noqa: E402
+from .identification import Identification as Identification  # noqa: E402
+from .identification import identify as identify  # noqa: E402
 from .kinematics import forward_kinematics as forward_kinematics  # noqa: E402
 from .ldwpso import LDWPSO as LDWPSO  # noqa: E402
 from .measurements import Measurements as Measurements  # noqa: E402

@@ -150,25 +150,36 @@ def l1_optimum(problem) -> Result:
     """
     problem = _as_problem(problem)
     W, tau = np.asarray(problem.W, float), np.asarray(problem.tau, float)
-    m, d = W.shape
     t0 = time.perf_counter()
-    # linprog minimises: min -tau^T y  s.t.  W^T y = 0,  -1 <= y <= 1
-    res = scipy.optimize.linprog(-tau, A_eq=W.T, b_eq=np.zeros(d), bounds=(-1.0, 1.0),
+    x, nit = l1_solve(W, tau)
+    return _result("L1-LP", problem, x, nit, run_s=time.perf_counter() - t0)
+
+
+def l1_solve(W, tau) -> tuple[np.ndarray, int]:
+    """``(argmin_x ||W x - tau||_1, HiGHS iterations)`` by the dual LP and polishing
+    described in :func:`l1_optimum`, on unit-norm columns; raises ``RuntimeError`` if the
+    LP fails."""
+    W, tau = np.asarray(W, float), np.asarray(tau, float)
+    d = W.shape[1]
+    norms = np.linalg.norm(W, axis=0)
+    scale = np.where(norms > 0, norms, 1.0)
+    Ws = W / scale
+    # linprog minimises: min -tau^T y  s.t.  Ws^T y = 0,  -1 <= y <= 1
+    res = scipy.optimize.linprog(-tau, A_eq=Ws.T, b_eq=np.zeros(d), bounds=(-1.0, 1.0),
                                  method="highs")
     if res.status != 0:
         raise RuntimeError(f"l1_optimum: the LP failed (status {res.status}): {res.message}")
-    x = -np.asarray(res.eqlin.marginals, dtype=float)
-    f = np.abs(W @ x - tau).sum()
-    if f > np.abs(W @ -x - tau).sum():  # sign convention of the marginals, checked
-        x, f = -x, np.abs(W @ -x - tau).sum()
-    rows = np.argsort(np.abs(W @ x - tau))[:d]
+    z = np.asarray(res.eqlin.marginals, dtype=float)
+    f = lambda v: np.abs(Ws @ v - tau).sum()  # noqa: E731
+    z = -z if f(-z) <= f(z) else z  # sign convention of the marginals
+    rows = np.argsort(np.abs(Ws @ z - tau))[:d]
     try:
-        x_polished = np.linalg.solve(W[rows], tau[rows])
-        if np.all(np.isfinite(x_polished)) and np.abs(W @ x_polished - tau).sum() <= f:
-            x = x_polished
-    except np.linalg.LinAlgError:  # degenerate vertex: keep HiGHS's point
+        polished = np.linalg.solve(Ws[rows], tau[rows])
+        if np.all(np.isfinite(polished)) and f(polished) <= f(z):
+            z = polished
+    except np.linalg.LinAlgError:  # singular vertex: keep HiGHS's point
         pass
-    return _result("L1-LP", problem, x, res.nit, run_s=time.perf_counter() - t0)
+    return z / scale, int(res.nit)
 
 
 def gap_to_optimum(result_f, l1_f, scale: float = 0.0):

@@ -21,8 +21,9 @@ BUILTIN_ROBOTS = ("rs010n", "kuka_lwr4")
 #: ``identify``'s default estimator and friction model: the combination that validates
 #: best on held-out real data in ``benchmarks/kuka_real.py`` (README, "Real robot").
 DEFAULT_METHOD = "WLS"
-DEFAULT_FRICTION = "viscous-coulomb+offset"
+DEFAULT_FRICTION = "viscous-coulomb+offset+quadratic+smooth"
 DEFAULT_METHOD_WHY = "best held-out NRMS on the KUKA LWR4+ data"
+WEIGHTS = ("auto", "residual", "limits", "equal")
 
 
 def _load_robot(spec: str, tip: str | None):
@@ -189,9 +190,15 @@ def _cmd_identify(args) -> None:
     data = load_measurements(args.data, **load)
     held_out = load_measurements(args.validate, **load) if args.validate else None
     limits = _torque_limits(args.robot, robot)
+    weights = {"auto": "limits" if limits is not None and args.method == "WLS" else None,
+               "equal": None}.get(args.weights, args.weights)
+    if weights == "limits" and limits is None:
+        raise ValueError(f"--weights limits: no torque limits known for --robot {args.robot} "
+                         f"(a URDF's <limit effort=...>)")
     ident = identify(robot, data.q, data.qd, data.qdd, data.tau, method=args.method,
                      friction=args.friction, physical=args.physical, limits=limits,
-                     runs=args.runs, iterations=args.iterations, seed=args.seed)
+                     weights=weights, runs=args.runs, iterations=args.iterations,
+                     seed=args.seed)
     fit = validation_metrics(data.tau, ident.predict(data.q, data.qd, data.qdd), limits)
     val = None if held_out is None else validation_metrics(
         held_out.tau, ident.predict(held_out.q, held_out.qd, held_out.qdd), limits)
@@ -328,6 +335,10 @@ def build_parser() -> argparse.ArgumentParser:
     ip.add_argument("--friction", default=DEFAULT_FRICTION,
                     help=f"friction model: terms of {', '.join(FRICTION_TERMS)} joined by + "
                     f"(default {DEFAULT_FRICTION})")
+    ip.add_argument("--weights", choices=WEIGHTS, default="auto",
+                    help="row weights per joint: residual (Gautier's two-step WLS), limits "
+                    "(1 / torque limit), equal; auto = limits for WLS when the robot has "
+                    "torque limits, else the method's default")
     ip.add_argument("--physical", action="store_true",
                     help="physically consistent parameters (OLS/WLS): positive-definite "
                     "pseudo-inertia per link, friction >= 0")
