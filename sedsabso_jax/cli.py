@@ -361,9 +361,33 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _enable_compilation_cache() -> str | None:
+    """Keep compiled XLA programs between runs of the command (JAX's persistent cache):
+    a second ``reproduce`` skips most compilation. Location: ``$SEDSABSO_JAX_CACHE``
+    (``off`` disables it), else ``$XDG_CACHE_HOME/sedsabso-jax/xla`` or
+    ``~/.cache/sedsabso-jax/xla``. Returns the directory used, or None."""
+    import jax
+
+    where = os.environ.get("SEDSABSO_JAX_CACHE")
+    if where is not None and where.strip().lower() in ("off", "0", "no", ""):
+        return None
+    if where is None:
+        root = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"),
+                                                                ".cache")
+        where = os.path.join(root, "sedsabso-jax", "xla")
+    try:
+        os.makedirs(where, exist_ok=True)
+    except OSError:  # read-only home: run without the cache
+        return None
+    jax.config.update("jax_compilation_cache_dir", where)
+    return where
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.command in ("reproduce", "identify"):
+        _enable_compilation_cache()
     try:
         with warnings.catch_warnings():
             if not args.debug:

@@ -22,16 +22,15 @@ Scenarios (the search box, recorded in the results):
 
 Timing (per swarm): ``time_mean_s`` is one run timed on its own after compilation,
 ``batched_time_s`` the ``runs`` runs in one compiled call (whose results are reported);
-compilation is reported apart in ``compile_s`` (single + batched executables). The six
-swarm executables compile on two worker threads while the excitation is designed, and all
-of them are finished before any run is timed.
+compilation is reported apart in ``compile_s`` (single + batched executables). On a CPU
+the batched runs go in sequence inside the one compiled call (``minimise(batch="auto")``);
+on a GPU they are vmapped.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 
 import jax
 import jax.numpy as jnp
@@ -43,7 +42,7 @@ from .bso import BSO
 from .fitness import L1Residual
 from .ldwpso import LDWPSO
 from .sedsabso import SEDSABSO
-from .swarm import minimise, precompile
+from .swarm import minimise
 
 SCENARIOS = ("paper", "prior")
 SWARMS = ("SEDSABSO", "BSO", "LDWPSO")
@@ -130,7 +129,7 @@ def run(settings: Settings = Settings(), progress: Callable[[str, int, int], Non
 
     settings.check()
     progress = progress or _progress_noop
-    total = 5 + len(SWARMS) + len(BASELINES)
+    total = 4 + len(SWARMS) + len(BASELINES)
     step = iter(range(total))
     dtype = jnp.float32 if settings.dtype == "float32" else jnp.float64
     key = jax.random.key(settings.seed)
@@ -139,18 +138,6 @@ def run(settings: Settings = Settings(), progress: Callable[[str, int, int], Non
     robot = robots.rs010n()
     base = base_parameters(robot)
     true = np.asarray(base.values, dtype=float)
-
-    # compile the six swarm executables on worker threads while the excitation is designed
-    # (only shapes matter); every one is finished before any run is timed
-    m = settings.samples * robot.n_joints
-    placeholder = L1Residual(np.zeros((m, base.rank)), np.zeros(m))
-    box = (-np.ones(base.rank), np.ones(base.rank))
-    pool = ThreadPoolExecutor(max_workers=2)
-    compiling = {
-        (name, runs): pool.submit(precompile, placeholder, solver, *box, key=key,
-                                  iterations=settings.iterations, runs=runs, dtype=dtype)
-        for name, solver in _solvers().items() for runs in (None, settings.runs)}
-    pool.shutdown(wait=False)
 
     progress("excitation design (Eq. 9)", next(step), total)
     design_kw = {} if settings.design_iterations is None else {
@@ -167,8 +154,6 @@ def run(settings: Settings = Settings(), progress: Callable[[str, int, int], Non
     problem = L1Residual.from_base(base, data.q, data.qd, data.qdd, data.tau)
     prior, lower, upper = search_box(true, settings.scenario, settings.seed)
 
-    progress("compiling the swarms", next(step), total)
-    compile_s = {k: future.result() for k, future in compiling.items()}
     algorithms, history_f, history_n = {}, {}, {}
     for i, (name, solver) in enumerate(_solvers().items(), start=1):
         progress(f"{name}: {settings.runs} runs", next(step), total)
@@ -184,7 +169,7 @@ def run(settings: Settings = Settings(), progress: Callable[[str, int, int], Non
             "fitness_mean": float(f.mean()), "fitness_std": float(f.std()),
             "fitness_runs": f.tolist(),
             "time_mean_s": single.run_s, "batched_time_s": many.run_s,
-            "compile_s": compile_s[name, None] + compile_s[name, settings.runs],
+            "compile_s": single.compile_s + many.compile_s,
             "max_abs_error": float(np.abs(x - true).max(axis=1).mean()),
             "params_mean": x.mean(axis=0).tolist(),
             "history_median": np.median(hf, axis=0).tolist(),

@@ -121,15 +121,25 @@ def test_same_key_same_numbers_other_key_other_numbers():
     assert b.compile_s == 0.0  # the second call reused the compiled code
 
 
-def test_batched_runs_equal_single_runs():
+@pytest.mark.parametrize("batch", ["vmap", 1, 2, "auto"])
+def test_batched_runs_equal_single_runs(batch):
     solver = SOLVERS["BSO"]
     box = (-2 * np.ones(2), 2 * np.ones(2))
     key = jax.random.key(5)
-    many = sj.minimise(rosenbrock, solver, *box, key=key, iterations=300, runs=3, shard=False)
+    many = sj.minimise(rosenbrock, solver, *box, key=key, iterations=300, runs=3, shard=False,
+                       batch=batch)
     for i, k in enumerate(jax.random.split(key, 3)):
         one = sj.minimise(rosenbrock, solver, *box, key=k, iterations=300)
         np.testing.assert_allclose(one.x, many.x[i], rtol=1e-10, atol=1e-12)
         np.testing.assert_allclose(one.history_f, many.history_f[i], rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("batch, message", [(0, "integer >= 1"), ("loop", "'auto', 'vmap'"),
+                                            (True, "integer >= 1")])
+def test_bad_batch(batch, message):
+    with pytest.raises(ValueError, match=message):
+        sj.minimise(rosenbrock, SOLVERS["BSO"], -np.ones(2), np.ones(2), key=jax.random.key(0),
+                    iterations=5, runs=2, batch=batch)
 
 
 @pytest.mark.parametrize("name", SOLVERS)
