@@ -124,7 +124,8 @@ def figure_population(history_n: dict):
     ax.set_xlabel("iteration")
     ax.set_ylabel("active beetles N(t)")
     ax.set_title("Population size (paper's Fig. 5): Eq. 15-16 against constant N")
-    ax.set_ylim(bottom=0)
+    top = max(int(np.max(history_n[k])) for k in ("SEDSABSO", "BSO") if k in history_n)
+    ax.set_ylim(0, 1.45 * top)  # room for the legend above the curves
     ax.legend(loc="upper right")
     ax.grid(alpha=0.3)
     return fig
