@@ -53,7 +53,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import scipy.signal
 
 from ._io import atomic_write
 
@@ -201,6 +200,8 @@ def lowpass(x, rate: float, cutoff_hz: float = DEFAULT_CUTOFF_HZ, *,
     """
     x = np.asarray(x, dtype=float)
     cutoff = _check_cutoff(cutoff_hz, float(rate), source)
+    import scipy.signal  # here: importing it costs ~1 s, and most runs never filter
+
     sos = scipy.signal.butter(int(order), cutoff, btype="low", output="sos", fs=float(rate))
     minimum = 3 * (2 * len(sos) + 1)  # scipy's default pad length
     if x.shape[0] <= minimum:

@@ -192,12 +192,23 @@ def _run_one(static, solver_dyn, fitness, lower, upper, key):
     return _single_run(solver, fitness, lower, upper, key, iterations)
 
 
-def _run_many(static, solver_dyn, fitness, lower, upper, keys):
+def _run_many(static, solver_dyn, fitness, lower, upper, keys, n_runs):
+    """All runs, one per key. In sequence (batch 1), only the first ``n_runs`` are
+    computed (the rest of the output stays zero): the same executable then times a
+    single run without a second compilation."""
     one = lambda k: _run_one(static, solver_dyn, fitness, lower, upper, k)  # noqa: E731
     batch = static[2]
     if batch == "vmap":
         return jax.vmap(one)(keys)
-    return jax.lax.map(one, keys, batch_size=batch)  # runs in sequence (chunks of batch)
+    if batch > 1:
+        return jax.lax.map(one, keys, batch_size=batch)  # chunks of vmapped runs
+
+    def body(i, out):
+        return jax.tree.map(lambda o, r: o.at[i].set(r), out, one(keys[i]))
+
+    shapes = jax.eval_shape(one, keys[0])
+    out = jax.tree.map(lambda a: jnp.zeros(keys.shape[:1] + a.shape, a.dtype), shapes)
+    return jax.lax.fori_loop(0, n_runs, body, out)
 
 
 def check_bounds(lower, upper, dim=None):
@@ -273,7 +284,26 @@ def _prepare(fitness, solver, lower, upper, key, iterations, runs, args, dtype, 
         mesh = jax.sharding.Mesh(np.array(devices), ("runs",))
         spec = jax.sharding.PartitionSpec("runs")
         keys = jax.device_put(keys, jax.sharding.NamedSharding(mesh, spec))
-    return _run_many, static_key, (dyn, fitness, lo, hi, keys)
+    return _run_many, static_key, (dyn, fitness, lo, hi, keys, jnp.int32(runs))
+
+
+def time_one_of_many(fitness, solver: AbstractSwarm, lower, upper, *, key, iterations: int,
+                     runs: int, dtype=jnp.float64) -> tuple[float, float]:
+    """``(compile_s, run_s)``: the wall time of ONE run through the executable that
+    ``minimise(..., runs=runs)`` uses, where that executable runs in sequence (a single
+    CPU device), so timing one run costs no compilation of its own; elsewhere the
+    single-run executable is compiled and timed."""
+    fn, static_key, call_args = _prepare(fitness, solver, lower, upper, key, iterations, runs,
+                                         None, dtype, True, "auto")
+    if static_key[2] != 1:
+        r = minimise(fitness, solver, lower, upper, key=key, iterations=iterations,
+                     dtype=dtype)
+        return r.compile_s, r.run_s
+    exe, compile_s = _compiled(fn, static_key, *call_args)
+    one = (*call_args[:-1], jnp.int32(1))
+    t0 = time.perf_counter()
+    jax.block_until_ready(exe(*one))
+    return compile_s, time.perf_counter() - t0
 
 
 def precompile(fitness, solver: AbstractSwarm, lower, upper, *, key, iterations: int = 600,

@@ -205,3 +205,16 @@ def test_runs_shard_over_devices():
                          timeout=300)
     assert run.returncode == 0, run.stderr[-2000:]
     assert "devices used: 4" in run.stdout
+
+
+def test_one_run_is_timed_without_a_second_compilation():
+    from sedsabso_jax.swarm import time_one_of_many
+
+    box = (-2 * np.ones(3), 2 * np.ones(3))
+    solver = sj.BSO(n_beetles=9)
+    kw = dict(key=jax.random.key(3), iterations=40)
+    many = sj.minimise(rosenbrock, solver, *box, runs=4, **kw)
+    compile_s, run_s = time_one_of_many(rosenbrock, solver, *box, runs=4, **kw)
+    if jax.default_backend() == "cpu" and jax.device_count() == 1:
+        assert compile_s == 0.0  # the batched executable, already compiled, runs one run
+    assert 0.0 < run_s < 10 * max(many.run_s, 1e-3)
