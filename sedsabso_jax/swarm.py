@@ -306,18 +306,6 @@ def time_one_of_many(fitness, solver: AbstractSwarm, lower, upper, *, key, itera
     return compile_s, time.perf_counter() - t0
 
 
-def precompile(fitness, solver: AbstractSwarm, lower, upper, *, key, iterations: int = 600,
-               runs: int | None = None, args=None, dtype=jnp.float64,
-               shard: bool = True, batch="auto") -> float:
-    """Compile what :func:`minimise` with the same arguments would run, without running
-    it; return the seconds spent (0 if already compiled). Only shapes and dtypes matter,
-    so placeholder data of the right shape will do. Safe to call from several threads:
-    compiling two configurations at once uses two cores."""
-    fn, static_key, call_args = _prepare(fitness, solver, lower, upper, key, iterations, runs,
-                                         args, dtype, shard, batch)
-    return _compiled(fn, static_key, *call_args)[1]
-
-
 def minimise(fitness, solver: AbstractSwarm, lower, upper, *, key, iterations: int = 600,
              runs: int | None = None, args=None, dtype=jnp.float64, shard: bool = True,
              batch="auto") -> Result:
