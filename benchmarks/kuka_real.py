@@ -39,10 +39,8 @@ FULL = "viscous-coulomb+offset+quadratic+smooth"
 
 
 def data_dir() -> str:
-    packaged = resources.files("sedsabso_jax") / "data" / "kuka_lwr4"
-    if (packaged / "measurements_1.npz").is_file():
-        return str(packaged)
-    return "/work/shared/data/kuka_lwr4"
+    """The KUKA files packaged with sedsabso-jax (sedsabso_jax/data/kuka_lwr4)."""
+    return str(resources.files("sedsabso_jax") / "data" / "kuka_lwr4")
 
 
 def load(path):

@@ -4,9 +4,7 @@ consistent fit, the swarms, warnings and bad input; held-out error on the real K
 from __future__ import annotations
 
 import json
-import os
 import warnings
-from importlib import resources
 
 import numpy as np
 import pytest
@@ -221,29 +219,18 @@ def test_bad_data(rs010n):
 
 
 # ---------------------------------------------------------------------- real KUKA data
-def _kuka_files():
-    for d in (resources.files("sedsabso_jax") / "data" / "kuka_lwr4",
-              "/work/shared/data/kuka_lwr4"):
-        paths = [os.path.join(str(d), f"measurements_{i}.npz") for i in (1, 2)]
-        if all(os.path.isfile(p) for p in paths):
-            return paths
-    return None
+def _kuka(run: int):
+    m = sj.load_kuka_lwr4(run)  # the packaged files, np.load(allow_pickle=False)
+    return [m.q, m.qd, m.qdd, m.tau]
 
 
-def _load(path):
-    with np.load(path, allow_pickle=False) as z:
-        return [np.asarray(z[k], dtype=float)
-                for k in ("positions", "velocities", "accelerations", "torques")]
-
-
-@pytest.mark.skipif(_kuka_files() is None, reason="KUKA LWR4+ measurement files not found")
 def test_kuka_held_out():
     """Identify on measurements_1, validate on measurements_2 (FloBaRoID's split)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the URDF's duplicate <origin>
         robot = sj.robots.kuka_lwr4()
     base = sj.base_parameters(robot)
-    train, test = (_load(p) for p in _kuka_files())
+    train, test = _kuka(1), _kuka(2)
 
     def held_out(**kw):
         ident = identify(robot, *train, base=base, limits=KUKA_LIMITS, **kw)
