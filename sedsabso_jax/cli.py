@@ -61,6 +61,7 @@ def base_parameter_table(robot, *, paper_columns: bool = False) -> str:
 
     from . import paper
     from .base_parameters import base_parameters
+    from .report import markdown_table
 
     base = base_parameters(robot)
     values = np.asarray(base.values)
@@ -74,15 +75,11 @@ def base_parameter_table(robot, *, paper_columns: bool = False) -> str:
             label, published = paper.TABLE5_THEORETICAL.get(name, ("", None))
             row += [label, "" if published is None else f"{published:g}"]
         rows.append(row)
-    widths = [max(len(r[k]) for r in [head, *rows]) for k in range(len(head))]
-    fmt = lambda r: "| " + " | ".join(c.ljust(w) for c, w in zip(r, widths)) + " |"  # noqa: E731
     lines = [
         f"{robot.name}: {base.rank} base parameters of {robot.n_params} "
         f"({robot.n_joints} joints x 12)",
         "",
-        fmt(head),
-        "|" + "|".join("-" * (w + 2) for w in widths) + "|",
-        *(fmt(r) for r in rows),
+        markdown_table(head, rows),
     ]
     if paper_columns:
         lines += [
@@ -184,9 +181,13 @@ def _cmd_identify(args) -> None:
                      friction=args.friction, physical=args.physical, limits=limits,
                      weights=weights, runs=args.runs, iterations=args.iterations,
                      seed=args.seed)
-    fit = validation_metrics(data.tau, ident.predict(data.q, data.qd, data.qdd), limits)
+    sets = {"torques_fit.png": (data, "identification data")}
+    if held_out is not None:
+        sets["torques_validation.png"] = (held_out, "held-out data")
+    predicted = {name: ident.predict(d.q, d.qd, d.qdd) for name, (d, _) in sets.items()}
+    fit = validation_metrics(data.tau, predicted["torques_fit.png"], limits)
     val = None if held_out is None else validation_metrics(
-        held_out.tau, ident.predict(held_out.q, held_out.qd, held_out.qdd), limits)
+        held_out.tau, predicted["torques_validation.png"], limits)
     names = robot.joint_names
     lines = [f"{robot.name}: {len(ident.names)} parameters identified by {ident.method} "
              f"(friction {ident.model.friction}) from {data.n_samples} samples of "
@@ -211,22 +212,17 @@ def _cmd_identify(args) -> None:
                      "loading": {**load, "data_info": _plain(data.info)},
                      **ident.settings},
     }
-    figures = {"torques_fit.png": (data, ident, "identification data")}
-    if held_out is not None:
-        figures["torques_validation.png"] = (held_out, ident, "held-out data")
-    rendered = {name: report.figure_torques(d.times, d.tau, ident.predict(d.q, d.qd, d.qdd),
-                                            names, f"{robot.name}, {ident.method}: {label}")
-                for name, (d, ident, label) in figures.items()}
     written = []
     if args.out is not None:
+        rendered = {name: report.figure_torques(d.times, d.tau, predicted[name], names,
+                                                f"{robot.name}, {ident.method}: {label}")
+                    for name, (d, label) in sets.items()}
         os.makedirs(args.out, exist_ok=True)
         for name, fig in rendered.items():
             report.save_figure(fig, os.path.join(args.out, name))
             written.append(os.path.join(args.out, name))
         write_json(os.path.join(args.out, "identification.json"), document)
         written.append(os.path.join(args.out, "identification.json"))
-    else:
-        report.close_figures()
     if args.json is not None:
         write_json(args.json, document)
         written.append(args.json)

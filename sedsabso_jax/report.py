@@ -16,7 +16,8 @@ from . import _io, paper
 COLOURS = {"SEDSABSO": "tab:red", "BSO": "tab:blue", "LDWPSO": "tab:green"}
 
 
-def _markdown(head: list[str], rows: list[list[str]]) -> str:
+def markdown_table(head: list[str], rows: list[list[str]]) -> str:
+    """A markdown table with columns padded to equal width."""
     widths = [max(len(r[k]) for r in [head, *rows]) for k in range(len(head))]
     fmt = lambda r: "| " + " | ".join(c.ljust(w) for c, w in zip(r, widths)) + " |"  # noqa: E731
     return "\n".join([fmt(head), "|" + "|".join("-" * (w + 2) for w in widths) + "|",
@@ -52,7 +53,7 @@ def table4(results: dict) -> str:
                      _g(a["gap_to_l1_optimum"], 3), _g(fit), _g(secs, 4)])
     return "\n".join([
         "# Table 4: final fitness and time per run", "", _settings_line(results), "",
-        _markdown(head, rows), "",
+        markdown_table(head, rows), "",
         "Fitness: Eq. 17, sum of |W_b p - tau| over samples and joints [N m]. time/run: one "
         "run on its own after compilation; batched: all runs in one compiled call. max abs "
         "error: a run's largest absolute base-parameter error, averaged over runs. The "
@@ -82,7 +83,7 @@ def table5(results: dict) -> str:
         rows.append(row)
     return "\n".join([
         "# Table 5: identified base parameters", "", _settings_line(results), "",
-        _markdown(head, rows), "",
+        markdown_table(head, rows), "",
         "Values: mean over runs (swarms) or the single estimate (OLS, LM, L1-LP); err: "
         "absolute error of that value. True values are computed from the paper's Table 2; "
         "the paper's columns are as published and inconsistent with Table 2 in places "
@@ -182,10 +183,6 @@ def figure_torques(times, tau_measured, tau_predicted, joint_names, title: str):
     axes[-1, 0].set_xlabel("time [s]")
     fig.suptitle(title)
     return fig
-
-
-def close_figures() -> None:
-    _pyplot().close("all")
 
 
 def save_figure(fig, path) -> None:
