@@ -35,7 +35,14 @@ import numpy as np
 
 PARTICLES = 50
 W_INERTIA, C1, C2 = 0.8, 2.0, 2.0
-SEEDS = (1, 2, 3)
+SEEDS = (1, 2, 3, 4, 5)
+
+
+def timing(times):
+    """Time per run: the fastest of the seeds (the shared machine only ever adds time) and
+    the median beside it."""
+    return {"time_per_run_s": float(np.min(times)),
+            "time_per_run_median_s": float(np.median(times))}
 
 
 def mealpy_row(W, tau, lo, hi, true, iterations, particles=PARTICLES):
@@ -65,7 +72,7 @@ def mealpy_row(W, tau, lo, hi, true, iterations, particles=PARTICLES):
         fs.append(f)
         errs.append(np.abs(x - true).max())
     return {"method": "mealpy OriginalPSO", "dtype": "float64", "compile_s": 0.0,
-            "time_per_run_s": float(np.median(times)), "fitness_mean": float(np.mean(fs)),
+            **timing(times), "fitness_mean": float(np.mean(fs)),
             "max_abs_error_mean": float(np.mean(errs))}
 
 
@@ -119,7 +126,7 @@ def evosax_row(W, tau, lo, hi, true, iterations, particles=PARTICLES, dtype="flo
         fs.append(float(f))
         errs.append(np.abs(np.asarray(x, dtype=float) - true).max())
     return {"method": "evosax PSO", "dtype": dt.name, "compile_s": compile_s,
-            "time_per_run_s": float(np.median(times)), "fitness_mean": float(np.mean(fs)),
+            **timing(times), "fitness_mean": float(np.mean(fs)),
             "max_abs_error_mean": float(np.mean(errs))}
 
 

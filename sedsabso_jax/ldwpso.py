@@ -10,12 +10,11 @@ optimization", CEC 1999. NOTES_ON_THE_PAPER.md Sec. 5::
 from __future__ import annotations
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from .bso import _check_common
-from .swarm import AbstractSwarm, evaluate, initial_state, update_bests
+from .swarm import AbstractSwarm, evaluate, initial_state, uniforms, update_bests
 
 
 class LDWPSO(AbstractSwarm):
@@ -47,11 +46,9 @@ class LDWPSO(AbstractSwarm):
         return initial_state(fitness, lower, upper, key, self.n_slots,
                              self.vmax_fraction * (upper - lower))
 
-    def step(self, fitness, s, t, iterations, lower, upper, key):
-        k1, k2 = jax.random.split(key)
+    def step(self, fitness, s, t, iterations, lower, upper, keys):
         w = self.w_start - (self.w_start - self.w_end) * t / max(iterations - 1, 1)
-        r1 = jax.random.uniform(k1, s.x.shape, s.x.dtype)
-        r2 = jax.random.uniform(k2, s.x.shape, s.x.dtype)
+        r1, r2 = uniforms(keys, s.x.shape, s.x.dtype)
         vmax = self.vmax_fraction * (upper - lower)
         v = w * s.v + self.c1 * r1 * (s.pbest_x - s.x) + self.c2 * r2 * (s.guide_x - s.x)
         v = jnp.clip(v, -vmax, vmax)

@@ -31,16 +31,18 @@ import jax.numpy as jnp
 import numpy as np
 
 from .bso import BSO, _check_common
-from .swarm import evaluate, initial_state
+from .swarm import evaluate, initial_state, uniforms
 
 
-def metropolis_accept(key, f_new, f_old, temperature):
+def metropolis_accept(u, f_new, f_old, temperature):
     """Metropolis criterion: accept with probability ``min(1, exp(-(f_new - f_old) / T))``.
 
-    Drawn as ``exp(-(f_new - f_old) / T) > U(0, 1)``; a non-finite ``f_new`` is never
-    accepted (``exp(-inf) = 0``; ``inf - inf`` gives NaN, which compares false).
+    Drawn as ``exp(-(f_new - f_old) / T) > u`` with ``u ~ U(0, 1)`` (a JAX PRNG key draws
+    it here); a non-finite ``f_new`` is never accepted (``exp(-inf) = 0``; ``inf - inf``
+    gives NaN, which compares false).
     """
-    u = jax.random.uniform(key, jnp.shape(f_new), jnp.result_type(f_new))
+    if jnp.issubdtype(jnp.asarray(u).dtype, jax.dtypes.prng_key):
+        u = jax.random.uniform(u, jnp.shape(f_new), jnp.result_type(f_new))
     return jnp.exp(-(f_new - f_old) / temperature) > u
 
 
@@ -90,36 +92,40 @@ class SEDSABSO(BSO):
         return initial_state(fitness, lower, upper, key, self.n_slots,
                              self.vmax_fraction * (upper - lower), self.temperature)
 
-    def step(self, fitness, s, t, iterations, lower, upper, key):
+    def randomness(self, key, dim, dtype):
+        """Keys for BSO's ``r1, r2`` (Eq. 11); Eq. 14's ``r`` (q x dim) and the q Metropolis
+        uniforms drawn up front."""
         key, sub = jax.random.split(key)
-        s, (gx, gf) = self.beetle_step(fitness, s, lower, upper, sub)
+        kr, ku = jax.random.split(key)
+        r = jax.random.uniform(kr, (self.q, dim), dtype)
+        return jax.random.split(sub), r, uniforms(jax.random.split(ku, self.q), (), dtype)
+
+    def step(self, fitness, s, t, iterations, lower, upper, keys):
+        k12, r, u = keys
+        r1, r2 = uniforms(k12, s.x.shape, s.x.dtype)
+        s, (gx, gf) = self.beetle_step(fitness, s, lower, upper, r1, r2)
         swarm_better = gf < s.guide_f
         guide_x = jnp.where(swarm_better, gx, s.guide_x)
         guide_f = jnp.where(swarm_better, gf, s.guide_f)
         if self.q == 0:  # no annealing: BSO with a shrinking population
             return eqx.tree_at(lambda s: (s.guide_x, s.guide_f, s.temperature), s,
                                (guide_x, guide_f, s.temperature * self.decay))
-        kr, ku = jax.random.split(key)
-        r = jax.random.uniform(kr, (self.q,) + gx.shape, gx.dtype)
         cand = jnp.clip(gx * (1.0 + self.perturbation_scale * r), lower, upper)  # Eq. 14
         fc, bad = evaluate(fitness, fitness.embed(cand))
-
-        def trial(carry, inp):  # Metropolis against the current guide, in turn
-            guide_f, chosen = carry
-            k, f_k, key_k = inp
-            accept = metropolis_accept(key_k, f_k, guide_f, s.temperature)
-            return (jnp.where(accept, f_k, guide_f), jnp.where(accept, k, chosen)), accept
-
-        trials = (jnp.arange(self.q, dtype=jnp.int32), fc, jax.random.split(ku, self.q))
-        (gf, chosen), accepts = jax.lax.scan(trial, (guide_f, jnp.int32(-1)), trials)
+        # Metropolis against the current guide, the q trials in turn (q is small: unrolled)
+        chosen, accepted = jnp.int32(-1), s.sa_accepted
+        for k in range(self.q):
+            accept = metropolis_accept(u[k], fc[k], guide_f, s.temperature)
+            guide_f = jnp.where(accept, fc[k], guide_f)
+            chosen = jnp.where(accept, k, chosen)
+            accepted = accepted + accept.astype(jnp.int32)
         gx = jnp.where(chosen >= 0, cand[jnp.maximum(chosen, 0)], guide_x)
         i = jnp.argmin(fc)
         better = fc[i] < s.best_f
         bx, bf = jnp.where(better, cand[i], s.best_x), jnp.where(better, fc[i], s.best_f)
-        accepted = s.sa_accepted + jnp.sum(accepts, dtype=jnp.int32)
         bad = s.n_nonfinite + bad
         return eqx.tree_at(
             lambda s: (s.guide_x, s.guide_f, s.best_x, s.best_f, s.sa_accepted, s.n_nonfinite,
                        s.n_evaluations, s.temperature),
-            s, (gx, gf, bx, bf, accepted, bad, s.n_evaluations + self.q,
+            s, (gx, guide_f, bx, bf, accepted, bad, s.n_evaluations + self.q,
                 s.temperature * self.decay))
