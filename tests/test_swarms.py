@@ -133,6 +133,16 @@ def test_batched_draws_equal_one_call_per_key():
         np.testing.assert_array_equal(b, jax.random.uniform(k, (4, 5), jnp.float64))
 
 
+def test_sedsabso_without_annealing():
+    """q = 0 is BSO with the shrinking population: no SA trial, no acceptance, and the
+    evaluations are exactly 3 per active beetle per iteration plus the initial slots."""
+    solver = sj.SEDSABSO(q=0)
+    r = sj.minimise(sphere, solver, -5 * np.ones(4), 5 * np.ones(4), key=jax.random.key(1),
+                    iterations=50)
+    assert int(r.sa_accepted) == 0 and np.isfinite(float(r.f))
+    assert int(r.n_evaluations) == solver.n_start + 3 * int(solver.schedule(50).sum())
+
+
 def test_same_key_same_numbers_other_key_other_numbers():
     solver = SOLVERS["SEDSABSO"]
     box = (-5 * np.ones(10), 5 * np.ones(10))
