@@ -19,6 +19,11 @@ import numpy as np
 from jaxtyping import Array, Float
 
 
+def finite_or_inf(f):
+    """NaN or Inf fitness counts as +Inf, so it never becomes a best."""
+    return jnp.where(jnp.isfinite(f), f, jnp.inf)
+
+
 class BlackBox(eqx.Module):
     """Any scalar fitness ``fn(x, args)``; the population is evaluated under ``vmap``."""
 
@@ -40,9 +45,7 @@ class BlackBox(eqx.Module):
         ``G = v``: two evaluations; a NaN or Inf value counts as +Inf."""
         fl, fr = self.value(E + a * G), self.value(E - a * G)
         bad = (~jnp.isfinite(fl)).astype(jnp.int32) + (~jnp.isfinite(fr)).astype(jnp.int32)
-        fl = jnp.where(jnp.isfinite(fl), fl, jnp.inf)
-        fr = jnp.where(jnp.isfinite(fr), fr, jnp.inf)
-        return fl - fr, bad
+        return finite_or_inf(fl) - finite_or_inf(fr), bad
 
 
 class L1Residual(eqx.Module):

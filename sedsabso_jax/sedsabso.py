@@ -37,12 +37,9 @@ from .swarm import evaluate, initial_state, uniforms
 def metropolis_accept(u, f_new, f_old, temperature):
     """Metropolis criterion: accept with probability ``min(1, exp(-(f_new - f_old) / T))``.
 
-    Drawn as ``exp(-(f_new - f_old) / T) > u`` with ``u ~ U(0, 1)``, or drawn here when
-    ``u`` is a JAX PRNG key; a non-finite ``f_new`` is never accepted (``exp(-inf) = 0``;
-    ``inf - inf`` gives NaN, which compares false).
+    Drawn as ``exp(-(f_new - f_old) / T) > u`` with ``u ~ U(0, 1)``; a non-finite ``f_new``
+    is never accepted (``exp(-inf) = 0``; ``inf - inf`` gives NaN, which compares false).
     """
-    if jnp.issubdtype(jnp.asarray(u).dtype, jax.dtypes.prng_key):
-        u = jax.random.uniform(u, jnp.shape(f_new), jnp.result_type(f_new))
     return jnp.exp(-(f_new - f_old) / temperature) > u
 
 

@@ -22,7 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
-from .fitness import as_fitness
+from .fitness import as_fitness, finite_or_inf
 from .result import Result
 
 
@@ -46,11 +46,6 @@ class SwarmState(eqx.Module):
     sa_accepted: Int[Array, ""]
     n_evaluations: Int[Array, ""]
     n_nonfinite: Int[Array, ""]
-
-
-def finite_or_inf(f):
-    """NaN or Inf fitness counts as +Inf, so it never becomes a best."""
-    return jnp.where(jnp.isfinite(f), f, jnp.inf)
 
 
 def evaluate(fitness, e, mask=None):
