@@ -31,7 +31,7 @@ import jax
 import numpy as np
 
 import sedsabso_jax as sj
-from sedsabso_jax.identification import identify, nrms_limits
+from sedsabso_jax.identification import identify, validation_metrics
 
 LIMITS = np.array([176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0])
 FIELDS = ("positions", "velocities", "accelerations", "torques")
@@ -54,11 +54,11 @@ def configurations(swarms: bool, runs: int):
         rows += [
             ("OLS", friction, dict(method="OLS")),
             ("WLS (Gautier, residual std)", friction, dict(method="WLS")),
-            ("WLS (1/limit)", friction, dict(method="WLS", weights="limits")),
+            ("WLS (1/limit)", friction, dict(method="WLS", sigma="limits")),
             ("L1 optimum (LP)", friction, dict(method="L1")),
-            ("L1 optimum (LP), 1/limit", friction, dict(method="L1", weights="limits")),
+            ("L1 optimum (LP), 1/limit", friction, dict(method="L1", sigma="limits")),
             ("LM (optimistix)", friction, dict(method="LM")),
-            ("physical, WLS (1/limit)", friction, dict(method="WLS", weights="limits",
+            ("physical, WLS (1/limit)", friction, dict(method="WLS", sigma="limits",
                                                        physical=True)),
             ("physical, OLS, prior weight 1", friction, dict(method="OLS", physical=True,
                                                              prior_weight=1.0)),
@@ -69,10 +69,10 @@ def configurations(swarms: bool, runs: int):
                                   ("viscous-coulomb+offset", "limits")):
             for name in ("SEDSABSO", "BSO", "LDWPSO"):
                 rows.append((f"{name} (paper)", friction,
-                             dict(method=name, weights=weights, runs=runs)))
+                             dict(method=name, sigma=weights, runs=runs)))
         for name, cls in (("SEDSABSO", sj.SEDSABSO), ("LDWPSO", sj.LDWPSO)):
             rows.append((f"{name}, Vmax = 0.1 (ub - lb)", "viscous-coulomb+offset",
-                         dict(method=name, weights="limits", solver=slow(cls.paper()),
+                         dict(method=name, sigma="limits", solver=slow(cls.paper()),
                               runs=runs)))
     return rows
 
@@ -100,7 +100,8 @@ def main(argv=None):
         ident = identify(robot, *train, friction=friction, **common, **kw)
         seconds = time.perf_counter() - t0
         tau_pred = ident.predict(*test[:3])
-        held, per_joint = nrms_limits(tau_pred, test[3], LIMITS)
+        metrics = validation_metrics(test[3], tau_pred, LIMITS)
+        held, per_joint = metrics.nrms_limits_percent, metrics.nrms_limits_percent_per_joint
         row = {"label": label, "friction": friction, "method": ident.method,
                "weights": ident.settings["weights"], "physical": ident.settings["physical"],
                "heldout_nrms_limits_percent": held,
@@ -111,13 +112,14 @@ def main(argv=None):
         if ident.full_params is not None:
             row["physically_consistent"] = sj.identification.is_physically_consistent(
                 ident.full_params)
-            row["newton_steps"] = ident.settings["newton_steps"]
+            row["physical_fit"] = ident.settings["physical_fit"]
         if "compile_s" in ident.settings:  # LM and swarms: compile time apart
             row.update(compile_s=ident.settings["compile_s"], run_s=ident.settings["run_s"])
         if "solver" in ident.settings:
             X = np.atleast_2d(np.asarray(ident.result.x, dtype=float))
             Yt = ident.model.regressor(*test[:3])
-            runs_held = [nrms_limits(Yt @ x, test[3], LIMITS)[0] for x in X]
+            runs_held = [validation_metrics(test[3], Yt @ x, LIMITS).nrms_limits_percent
+                         for x in X]
             row.update(solver=ident.settings["solver"], box=ident.settings["box"],
                        runs=len(runs_held), heldout_runs_percent=runs_held,
                        f_runs=ident.settings["f_runs"])

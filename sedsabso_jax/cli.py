@@ -1,97 +1,37 @@
-"""The ``sedsabso-jax`` command.
+"""The ``sedsabso-jax`` command: argument parsing and dispatch, nothing else.
 
 * ``sedsabso-jax reproduce``: the paper's experiment end to end (tables, figures, JSON);
+* ``sedsabso-jax identify --robot ... --data ...``: identify a robot from measured data;
 * ``sedsabso-jax base-parameters --robot PATH.urdf``: a robot's base-parameter table
   (``sedsabso-jax`` alone: the paper robot's, RS010N).
 
 Bad input exits with status 2 and one line on stderr (``--debug`` shows the traceback);
-result files are written atomically, so a failed run leaves none.
+warnings are one line each on stderr; result files are written atomically, so a failed
+run leaves none.
 """
 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import os
 import sys
 import time
 import warnings
 
-BUILTIN_ROBOTS = ("rs010n", "kuka_lwr4")
 #: ``identify``'s default estimator and friction model: the combination that validates
 #: best on held-out real data in ``benchmarks/kuka_real.py`` (README, "Real robot").
 DEFAULT_METHOD = "WLS"
 DEFAULT_FRICTION = "viscous-coulomb+offset+quadratic+smooth"
 DEFAULT_METHOD_WHY = "best held-out NRMS on the KUKA LWR4+ data"
 WEIGHTS = ("auto", "residual", "limits", "equal")
-
-
-def _load_robot(spec: str, tip: str | None):
-    from . import robots
-
-    if spec in BUILTIN_ROBOTS:
-        if tip is not None:
-            raise ValueError(f"--tip applies to URDF files, not to the built-in robot {spec!r}")
-        return getattr(robots, spec)()
-    if not spec.lower().endswith(".urdf"):
-        raise ValueError(f"--robot must be one of {BUILTIN_ROBOTS} or a .urdf file, got {spec!r}")
-    if not os.path.isfile(spec):
-        raise ValueError(f"--robot: no such file {spec!r}")
-    return robots.from_urdf(spec, tip=tip)
-
-
-def _torque_limits(spec: str, robot):
-    """Torque limits (URDF efforts) of the robot's joints, or None when unknown."""
-    import numpy as np
-
-    from .excitation import joint_limits_from_urdf
-    from .robots import KUKA_LWR4_URDF
-
-    if spec == "rs010n":
-        return None
-    with KUKA_LWR4_URDF() if spec == "kuka_lwr4" else contextlib.nullcontext(spec) as path:
-        tau_max = np.asarray(joint_limits_from_urdf(path, robot).tau_max, dtype=float)
-    return tau_max if np.all(np.isfinite(tau_max) & (tau_max > 0)) else None
-
-
-def base_parameter_table(robot, *, paper_columns: bool = False) -> str:
-    """Markdown table: name, expression, value from the robot's parameters; with
-    ``paper_columns`` (the built-in RS010N) the paper's Table 5 beside it."""
-    import numpy as np
-
-    from . import paper
-    from .base_parameters import base_parameters
-    from .report import markdown_table
-
-    base = base_parameters(robot)
-    values = np.asarray(base.values)
-    head = ["#", "base parameter", "expression", "value (Table 2)" if paper_columns else "value"]
-    if paper_columns:
-        head += ["paper's Table 5 expression", "paper's Table 5 value"]
-    rows = []
-    for i, (name, expr, value) in enumerate(zip(base.names, base.expressions, values), 1):
-        row = [str(i), name, expr, f"{value:.4f}"]
-        if paper_columns:
-            label, published = paper.TABLE5_THEORETICAL.get(name, ("", None))
-            row += [label, "" if published is None else f"{published:g}"]
-        rows.append(row)
-    lines = [
-        f"{robot.name}: {base.rank} base parameters of {robot.n_params} "
-        f"({robot.n_joints} joints x 12)",
-        "",
-        markdown_table(head, rows),
-    ]
-    if paper_columns:
-        lines += [
-            "",
-            "Values are computed from the paper's Table 2. The paper's Table 5 column is shown",
-            "as published; it is inconsistent with Table 2 (see sedsabso_jax/paper.py).",
-        ]
-    return "\n".join(lines)
+BUILTIN_ROBOTS = ("rs010n", "kuka_lwr4")
 
 
 def _cmd_base_parameters(args) -> None:
-    robot = _load_robot(args.robot, args.tip)
+    from .dynamics import robots
+    from .reproduce.report import base_parameter_table
+
+    robot = robots.load(args.robot, args.tip)
     print(base_parameter_table(robot, paper_columns=args.robot == "rs010n"))
 
 
@@ -142,7 +82,7 @@ _non_negative_float = _number(float, 0, strict=False)
 
 
 def _cmd_reproduce(args) -> None:
-    from . import experiment, report
+    from .reproduce import experiment, report
 
     settings = experiment.Settings(runs=args.runs, iterations=args.iterations,
                                    samples=args.samples, noise=args.noise,
@@ -157,101 +97,52 @@ def _cmd_reproduce(args) -> None:
 
 
 def _cmd_identify(args) -> None:
-    import numpy as np
-
-    from . import report
-    from ._io import write_json
-    from .identification import identify
-    from .measurements import load_measurements
-    from .metrics import validation_metrics
+    from .dynamics import robots
+    from .dynamics.limits import joint_limits
+    from .identification.identify import identify
+    from .identification.report import IdentificationReport
+    from .measurements.load import load_measurements
 
     _check_writable(args.out, args.json)
-    robot = _load_robot(args.robot, args.tip)
+    robot = robots.load(args.robot, args.tip)
     load = dict(n_joints=robot.n_joints, cutoff_hz=args.cutoff_hz,
                 filter_torques=args.filter_torques, downsample=args.downsample)
     data = load_measurements(args.data, **load)
     held_out = load_measurements(args.validate, **load) if args.validate else None
-    limits = _torque_limits(args.robot, robot)
-    weights = {"auto": "limits" if limits is not None and args.method == "WLS" else None,
-               "equal": None}.get(args.weights, args.weights)
-    if weights == "limits" and limits is None:
+    limits = joint_limits(args.robot, robot).torque_limits
+    sigma = {"auto": "limits" if limits is not None and args.method == "WLS" else None,
+             "equal": None}.get(args.weights, args.weights)
+    if sigma == "limits" and limits is None:
         raise ValueError(f"--weights limits: no torque limits known for --robot {args.robot} "
                          f"(a URDF's <limit effort=...>)")
     ident = identify(robot, data.q, data.qd, data.qdd, data.tau, method=args.method,
                      friction=args.friction, physical=args.physical, limits=limits,
-                     weights=weights, runs=args.runs, iterations=args.iterations,
-                     seed=args.seed)
-    sets = {"torques_fit.png": (data, "identification data")}
-    if held_out is not None:
-        sets["torques_validation.png"] = (held_out, "held-out data")
-    predicted = {name: ident.predict(d.q, d.qd, d.qdd) for name, (d, _) in sets.items()}
-    fit = validation_metrics(data.tau, predicted["torques_fit.png"], limits)
-    val = None if held_out is None else validation_metrics(
-        held_out.tau, predicted["torques_validation.png"], limits)
-    names = robot.joint_names
-    lines = [f"{robot.name}: {len(ident.names)} parameters identified by {ident.method} "
-             f"(friction {ident.model.friction}) from {data.n_samples} samples of "
-             f"{args.data}", "", "| # | parameter | value |", "|---|---|---|"]
-    lines += [f"| {i} | {n} | {v:.6g} |" for i, (n, v) in
-              enumerate(zip(ident.names, np.asarray(ident.values)), 1)]
-    lines += ["", "fit (identification data):", fit.table(names)]
-    if val is not None:
-        lines += ["", f"validation ({args.validate}, {held_out.n_samples} samples):",
-                  val.table(names)]
-    if limits is None:
-        lines += ["", "NRMS over torque limits: no limits known for this robot"]
-    document = {
-        "base_parameters": {"names": list(ident.names),
-                            "values": [float(v) for v in np.asarray(ident.values)]},
-        "fit": {**fit.as_dict(), "residual": ident.fit},
-        "validation": None if val is None else val.as_dict(),
-        "settings": {"robot": args.robot, "data": os.path.abspath(args.data),
-                     "validate": None if args.validate is None
-                     else os.path.abspath(args.validate),
-                     "torque_limits": None if limits is None else limits.tolist(),
-                     "loading": {**load, "data_info": _plain(data.info)},
-                     **ident.settings},
-    }
-    written = []
-    if args.out is not None:
-        rendered = {name: report.figure_torques(d.times, d.tau, predicted[name], names,
-                                                f"{robot.name}, {ident.method}: {label}")
-                    for name, (d, label) in sets.items()}
-        os.makedirs(args.out, exist_ok=True)
-        for name, fig in rendered.items():
-            report.save_figure(fig, os.path.join(args.out, name))
-            written.append(os.path.join(args.out, name))
-        write_json(os.path.join(args.out, "identification.json"), document)
-        written.append(os.path.join(args.out, "identification.json"))
-    if args.json is not None:
-        write_json(args.json, document)
-        written.append(args.json)
-    print("\n".join(lines))
+                     sigma=sigma, runs=args.runs, iterations=args.iterations, seed=args.seed)
+    report = IdentificationReport.evaluate(ident, data, held_out, limits)
+    settings = {"robot": args.robot, "data": os.path.abspath(args.data),
+                "validate": None if args.validate is None else os.path.abspath(args.validate),
+                "torque_limits": limits, "loading": {**load, "data_info": data.info}}
+    written = report.write(settings, args.out, args.json)
+    print(report.text())
     if written:
         print("written: " + ", ".join(written))
 
 
-def _plain(value):
-    """JSON-ready copy of a small info dict (numpy scalars to floats)."""
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if hasattr(value, "item"):
-        return value.item()
-    return value
-
-
 def _check_writable(out_dir, json_path) -> None:
     """Fail before the (long) run, not after it, when an output cannot be written."""
-    if out_dir is not None and os.path.exists(out_dir) and not os.path.isdir(out_dir):
-        raise ValueError(f"--out {out_dir!r} exists and is not a directory")
-    if json_path is not None:
-        parent = os.path.dirname(os.path.abspath(json_path))
-        if not os.path.isdir(parent):
-            raise ValueError(f"--json {json_path!r}: no such directory {parent!r}")
-        if os.path.isdir(json_path):
-            raise ValueError(f"--json {json_path!r} is a directory; expected a file path")
+    for flag, path in (("--out", out_dir), ("--json", json_path)):
+        if path is None:
+            continue
+        existing = os.path.abspath(path if flag == "--out" else os.path.dirname(
+            os.path.abspath(path)))
+        while not os.path.exists(existing):  # the directories that will be created
+            existing = os.path.dirname(existing)
+        if not os.path.isdir(existing):
+            raise ValueError(f"{flag} {path!r}: {existing!r} exists and is not a directory")
+        if not os.access(existing, os.W_OK):
+            raise ValueError(f"{flag} {path!r}: directory {existing!r} is not writable")
+    if json_path is not None and os.path.isdir(json_path):
+        raise ValueError(f"--json {json_path!r} is a directory; expected a file path")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -262,21 +153,31 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .identification.identify import METHODS
+    from .identification.model import FRICTION_TERMS
+
+    common = argparse.ArgumentParser(add_help=False)
+    # SUPPRESS: a subcommand's --debug does not reset the one given before it
+    common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                        help="show tracebacks on errors and warnings in full")
     parser = _Parser(
         prog="sedsabso-jax",
         description="Identify robot dynamic parameters (SEDSABSO, JAX). Without a command: "
         "print the RS010N base-parameter table.",
     )
-    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
-    sub = parser.add_subparsers(dest="command")
-    bp = sub.add_parser("base-parameters", help="print a robot's base-parameter table")
+    parser.add_argument("--debug", action="store_true",
+                        help="show tracebacks on errors and warnings in full")
+    sub = parser.add_subparsers(dest="command", parser_class=_Parser)
+    bp = sub.add_parser("base-parameters", parents=[common],
+                        help="print a robot's base-parameter table")
     bp.add_argument("--robot", default="rs010n",
                     help=f"one of {', '.join(BUILTIN_ROBOTS)} or a .urdf file (default rs010n)")
     bp.add_argument("--tip", default=None, help="URDF tip link, for trees that branch")
     bp.set_defaults(func=_cmd_base_parameters)
 
     rp = sub.add_parser(
-        "reproduce", help="re-run the paper's experiment (Tables 4-5, Figures 5-6)",
+        "reproduce", parents=[common],
+        help="re-run the paper's experiment (Tables 4-5, Figures 5-6)",
         description="Re-run the paper's experiment on the RS010N: base parameters, excitation "
         "design (Eq. 9), simulated torques, SEDSABSO / BSO / LDWPSO with the paper's settings "
         "beside OLS, Levenberg-Marquardt and the exact L1 optimum.")
@@ -299,10 +200,9 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--json", default=None, help="also write results.json to this path")
     rp.set_defaults(func=_cmd_reproduce)
 
-    from .identification import FRICTION_TERMS, METHODS
-
     ip = sub.add_parser(
-        "identify", help="identify a robot's base parameters from measured data",
+        "identify", parents=[common],
+        help="identify a robot's base parameters from measured data",
         description="Identify base parameters from joint data (.npz with keys positions, "
         "velocities, accelerations, torques, times; or .csv with a header time,q1..,qd1..,"
         "qdd1..,tau1..) and validate on held-out data.")
@@ -334,9 +234,10 @@ def build_parser() -> argparse.ArgumentParser:
     ip.add_argument("--filter-torques", action="store_true", help="low-pass the torques")
     ip.add_argument("--downsample", type=_positive_int, default=1,
                     help="keep every k-th sample after filtering (1)")
-    ip.add_argument("--json", default=None, help="write the results JSON to this path")
+    ip.add_argument("--json", default=None,
+                    help="write the results JSON to this path (its directory is created)")
     ip.add_argument("--out", default=None,
-                    help="directory for torque plots and identification.json")
+                    help="directory for torque plots and identification.json (created)")
     ip.set_defaults(func=_cmd_identify)
     parser.set_defaults(func=_cmd_base_parameters, robot="rs010n", tip=None)
     return parser
@@ -364,6 +265,12 @@ def _enable_compilation_cache() -> str | None:
     return where
 
 
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """``warnings.showwarning`` for the command: one short line on stderr."""
+    text = " ".join(str(message).split())
+    print(f"sedsabso-jax: warning: {text}", file=sys.stderr if file is None else file)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -372,7 +279,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with warnings.catch_warnings():
             if not args.debug:
-                warnings.simplefilter("ignore", UserWarning)
+                warnings.showwarning = _one_line_warning
+            warnings.simplefilter("default", UserWarning)  # each distinct warning once
             args.func(args)
     except BrokenPipeError:  # output piped into e.g. `head`: stop quietly (Python docs recipe)
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -1,13 +1,38 @@
-"""Numbers published in the paper, kept apart from anything the package computes.
+"""The numbers published in the paper, in one place, as printed.
+
+"A New Method for Identifying Kinetic Parameters of Industrial Robots", *Actuators* 2022,
+11(1), 2, doi:10.3390/act11010002.
+
+Data only: this module imports nothing from the package, so every layer may read it.
+Tables 2 and 3 describe the RS010N (:func:`sedsabso_jax.robots.rs010n` and
+:meth:`sedsabso_jax.JointLimits.rs010n` are built from them); Tables 4 and 5 are the
+paper's results, shown beside ours and never used in a computation.
 
 The paper's Eq. 3 and Table 5 "theoretical values" are not consistent with its Table 2
-under any reading (NOTES_ON_THE_PAPER.md Sec. 1): e.g. Table 5 writes
+under any reading (``docs/paper-notes.md``, Sec. 1): e.g. Table 5 writes
 ``I_2x + (m2 + m3) a2^2`` where Eq. 3 writes ``I_2x + (m2 + m3) a2``, and several rows use
-centre-of-mass coordinates where first moments belong. They are shown beside the values
-computed from Table 2, labelled as the paper's, never used in a computation.
+centre-of-mass coordinates where first moments belong.
 """
 
 from __future__ import annotations
+
+#: Table 2 (RS010N, links 1-3): inertia about the link-frame origin, in the link frame, in
+#: kg m^2; mass in kg; centre of mass in mm (link frame); friction zero. Kept as published,
+#: although ``Ixx`` of link 2 (-10.02) is not physically possible.
+TABLE2 = {
+    "Ixx": (36.33, -10.02, 7.74),
+    "Iyy": (40.61, 7.05, 1.02),
+    "Izz": (36.33, 11.61, 9.81),
+    "Ixy": (0.00, 6.14, 3.34),
+    "Ixz": (0.00, 5.93, -3.42),
+    "Iyz": (0.00, -7.82, -0.29),
+    "m": (18.33, 25.18, 20.47),
+    "x_mm": (0.00, 122.41, 152.34),
+    "y_mm": (110.11, 163.81, 90.24),
+    "z_mm": (0.00, 73.36, -34.21),
+    "Fc": (0.0, 0.0, 0.0),
+    "Fv": (0.0, 0.0, 0.0),
+}
 
 #: Table 5, "Theoretical Value" column, keyed by the base parameter of
 #: :func:`sedsabso_jax.base_parameters` on :func:`sedsabso_jax.robots.rs010n` that the row

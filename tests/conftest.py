@@ -57,7 +57,7 @@ def random_urdf(rng, n_movable: int, *, prismatic_prob=0.2, fixed_prob=0.3,
         m, com, I = random_inertial(rng)
         rpy = rng.uniform(-np.pi, np.pi, 3)
         # express the inertia in a rotated inertial frame to exercise <origin rpy>
-        from sedsabso_jax._spatial import rpy_matrix
+        from sedsabso_jax.dynamics.spatial import rpy_matrix
 
         Rin = rpy_matrix(rpy)
         Iin = Rin.T @ I @ Rin
@@ -120,7 +120,7 @@ def random_dh(rng, n: int, prismatic_prob=0.2):
         "theta": rng.uniform(-np.pi, np.pi, n),
         "prismatic": rng.uniform(size=n) < prismatic_prob,
     }
-    from sedsabso_jax._spatial import params_from_com
+    from sedsabso_jax.dynamics.inertia import params_from_com
 
     params = []
     for _ in range(n):

@@ -21,11 +21,11 @@ from sedsabso_jax.excitation import (
     FourierTrajectory,
     JointLimits,
     check_trajectory,
+    coefficient_box,
     condition_number,
     design_excitation,
     joint_limits_from_urdf,
     sampling_margin,
-    search_box,
     violations,
 )
 
@@ -329,7 +329,7 @@ def test_design_is_feasible_and_beats_random_and_a_sine(small_design):
     assert d.n_random == int(d.result.n_evaluations) and 0 < d.n_random_feasible < d.n_random
     assert d.cond <= d.random_cond
     # a naive excitation: one sine per joint at half the box, centred
-    lo, hi = search_box(lim)
+    lo, hi = coefficient_box(lim)
     a = np.zeros((3, 5))
     a[:, 0] = hi[0:15:5] / 2
     sine = FourierTrajectory(a, 0 * a, (hi[30:] + lo[30:]) / 2)
@@ -364,7 +364,7 @@ def test_design_input_errors(small_design):
 def test_fitness_is_eq_9_and_the_graded_penalty_orders_infeasible_ones(small_design):
     import equinox as eqx
 
-    from sedsabso_jax.excitation import PENALTY, _problem, _sample
+    from sedsabso_jax.excitation import PENALTY, DesignProblem, design_fitness
 
     robot, base, d = small_design
     lim = JointLimits.rs010n()
@@ -373,11 +373,11 @@ def test_fitness_is_eq_9_and_the_graded_penalty_orders_infeasible_ones(small_des
     X = jnp.stack([x, x.at[:n_coef].multiply(3.0), x.at[:n_coef].multiply(6.0)])
     values = {}
     for graded in (True, False):
-        problem = _problem(robot, base, lim, 5, d.trajectory.wf, 10.0, 100, graded)
-        values[graded] = np.asarray(eqx.filter_jit(jax.vmap(lambda x, p: p(x), (0, None)))(
+        problem = DesignProblem.build(robot, base, lim, 5, d.trajectory.wf, 10.0, 100, graded)
+        values[graded] = np.asarray(eqx.filter_jit(jax.vmap(design_fitness, (0, None)))(
             X, problem))
     t_design = 10.0 * np.arange(100) / 100
-    cond = condition_number(base, *_sample(d.trajectory, t_design))
+    cond = condition_number(base, *d.trajectory.sample(t_design))
     assert values[True][0] == values[False][0] == pytest.approx(cond, rel=1e-8)
     assert np.all(values[False][1:] >= PENALTY) and np.all(values[False][1:] < PENALTY + 1e6)
     assert values[True][2] > values[True][1] > 1.5 * PENALTY  # more excess, worse

@@ -12,7 +12,7 @@ from conftest import random_dh
 
 import sedsabso_jax as sj
 from sedsabso_jax import baselines
-from sedsabso_jax.identification import identify, is_physically_consistent, nrms_limits
+from sedsabso_jax.identification import identify, is_physically_consistent, validation_metrics
 
 KUKA_LIMITS = np.array([176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0])
 
@@ -70,7 +70,7 @@ def test_wls_weights(rs010n, rng):
     tau_noisy = tau + 0.5 * rng.standard_normal(tau.shape)
     ols = identify(robot, q, qd, qdd, tau_noisy, base=base)
     # equal weights: WLS is OLS exactly
-    same = identify(robot, q, qd, qdd, tau_noisy, method="WLS", weights=[2.0, 2.0, 2.0],
+    same = identify(robot, q, qd, qdd, tau_noisy, method="WLS", sigma=[2.0, 2.0, 2.0],
                     base=base)
     np.testing.assert_allclose(same.values, ols.values, rtol=1e-10, atol=1e-10)
     # equal noise: Gautier's weights come out nearly equal, so WLS stays close to OLS
@@ -86,7 +86,7 @@ def test_wls_weights(rs010n, rng):
     err = {m: np.linalg.norm(identify(robot, q, qd, qdd, tau_unequal, method=m,
                                       base=base).values - true) for m in ("OLS", "WLS")}
     assert err["WLS"] < 0.8 * err["OLS"]
-    lim = identify(robot, q, qd, qdd, tau_noisy, method="WLS", weights="limits",
+    lim = identify(robot, q, qd, qdd, tau_noisy, method="WLS", sigma="limits",
                    limits=[100.0, 100.0, 50.0], base=base)
     assert lim.settings["sigma"] == [100.0, 100.0, 50.0]
     assert "nrms_limits_percent" in lim.fit
@@ -125,7 +125,8 @@ def test_physical_fit(rs010n, rng):
     masses = np.asarray(phys.full_params).reshape(3, 12)[:, 6]
     assert np.all(masses > 0)
     assert phys.fit["l2"] > ols.fit["l2"]
-    assert phys.settings["newton_steps"] > 0
+    assert phys.settings["physical_fit"]["status"] == "optimal"
+    assert phys.settings["physical_fit"]["iterations"] > 0
 
 
 def test_swarm_identification(rs010n, rng):
@@ -144,6 +145,40 @@ def test_swarm_identification(rs010n, rng):
     v = np.asarray(base.values)
     half = np.maximum(0.1 * np.abs(v), 0.1)
     assert np.all(np.abs(ident.values - v) <= half + 1e-12)
+
+
+def test_physical_fit_never_fails_silently(rs010n, rng, monkeypatch):
+    """Clarabel's status is checked: an inaccurate solve warns, a failed one (or a solver
+    error) raises with the status, instead of returning whatever the solver left."""
+    import cvxpy as cp
+
+    robot, base = rs010n
+    q, qd, qdd = states(rng, 3)
+    tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
+    solve = cp.Problem.solve
+
+    def ending_with(status):
+        def patched(self, *args, **kwargs):
+            out = solve(self, *args, **kwargs)
+            self._status = status
+            return out
+        return patched
+
+    monkeypatch.setattr(cp.Problem, "solve", ending_with(cp.OPTIMAL_INACCURATE))
+    with pytest.warns(UserWarning, match="optimal_inaccurate"):
+        ident = identify(robot, q, qd, qdd, tau, physical=True, base=base)
+    assert ident.settings["physical_fit"]["status"] == "optimal_inaccurate"
+    for status in (cp.INFEASIBLE, cp.UNBOUNDED, cp.INFEASIBLE_INACCURATE):
+        monkeypatch.setattr(cp.Problem, "solve", ending_with(status))
+        with pytest.raises(RuntimeError, match=f"status '{status}'"):
+            identify(robot, q, qd, qdd, tau, physical=True, base=base)
+
+    def raising(self, *args, **kwargs):
+        raise cp.error.SolverError("numerical trouble")
+
+    monkeypatch.setattr(cp.Problem, "solve", raising)
+    with pytest.raises(RuntimeError, match="conic solver failed: numerical trouble"):
+        identify(robot, q, qd, qdd, tau, physical=True, base=base)
 
 
 def test_rank_deficiency_warns(rs010n, rng):
@@ -179,9 +214,9 @@ def test_predict_batches(rs010n, rng):
     (dict(friction="stribeck"), "unknown friction term"),
     (dict(friction=""), "friction must be a string"),
     (dict(method="L1", physical=True), "physical=True is a least-squares fit"),
-    (dict(weights="limits"), "needs limits"),
-    (dict(weights=[1.0, -1.0, 1.0]), "weights must be 3 positive"),
-    (dict(weights="robust"), "weights must be None"),
+    (dict(sigma="limits"), "needs limits"),
+    (dict(sigma=[1.0, -1.0, 1.0]), "sigma must be 3 positive"),
+    (dict(sigma="robust"), "sigma must be None"),
     (dict(limits=[1.0, 2.0]), "limits must be 3 positive"),
     (dict(method="BSO", runs=0), "runs must be an integer"),
     (dict(method="BSO", iterations=2.5), "iterations must be an integer"),
@@ -234,14 +269,15 @@ def test_kuka_held_out():
 
     def held_out(**kw):
         ident = identify(robot, *train, base=base, limits=KUKA_LIMITS, **kw)
-        return ident, nrms_limits(ident.predict(*test[:3]), test[3], KUKA_LIMITS)[0]
+        predicted = ident.predict(*test[:3])
+        return ident, validation_metrics(test[3], predicted, KUKA_LIMITS).nrms_limits_percent
 
     _, plain = held_out()
     assert plain == pytest.approx(0.2156, abs=5e-4)  # the issue's 0.216 %
-    best, value = held_out(method="WLS", weights="limits",
+    best, value = held_out(method="WLS", sigma="limits",
                            friction="viscous-coulomb+offset+quadratic+smooth")
     assert value <= 0.17  # goal; best published on these files: 0.176 %
     assert value < 0.12
-    phys, value = held_out(method="WLS", weights="limits", friction="offset", physical=True)
+    phys, value = held_out(method="WLS", sigma="limits", friction="offset", physical=True)
     assert is_physically_consistent(phys.full_params)
     assert value <= 0.17

@@ -168,3 +168,39 @@ def test_existing_result_survives_a_failed_run(rs010n_files, tmp_path, capsys):
     bad = _write_bad(tmp_path, "nan", rs010n_files[0])
     assert _status(["identify", "--robot", "rs010n", "--data", bad, "--json", str(js)]) == 2
     assert js.read_text() == '{"previous": true}\n'
+
+
+def test_warnings_reach_stderr_as_one_line_each(tmp_path, capsys):
+    """A joint that never moves leaves its friction unidentifiable: the command says so on
+    stderr without --debug, one line, and still exits 0 with the minimum-norm fit."""
+    robot = sj.robots.rs010n()
+    t = np.arange(300) / 50.0
+    q = np.column_stack([np.sin(t), 0.5 * np.cos(1.3 * t), np.full_like(t, 0.3)])
+    qd = np.column_stack([np.cos(t), -0.65 * np.sin(1.3 * t), np.zeros_like(t)])
+    qdd = np.column_stack([-np.sin(t), -0.845 * np.cos(1.3 * t), np.zeros_like(t)])
+    data = sj.simulate_measurements(robot, q, qd, qdd, t, torque_noise=0.01, seed=4)
+    path = data.save(tmp_path / "frozen.npz")
+    assert cli.main(["identify", "--robot", "rs010n", "--data", str(path), "--method", "OLS"]
+                    ) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    warning = [line for line in err if "rank deficient" in line]
+    assert len(warning) == 1 and warning[0].startswith("sedsabso-jax: warning: identify:")
+    assert "FC3" in warning[0] and "FV3" in warning[0]
+
+
+def test_debug_is_accepted_after_the_subcommand(rs010n_files, tmp_path, capsys):
+    argv = ["identify", "--robot", "rs010n", "--data", rs010n_files[0], "--method", "OLS",
+            "--friction", "viscous-coulomb"]
+    assert cli.main([*argv, "--debug"]) == 0
+    assert cli.main(["--debug", *argv]) == 0
+    with pytest.raises(FileNotFoundError):  # --debug: the exception itself, with traceback
+        cli.main(["identify", "--robot", "rs010n", "--data", str(tmp_path / "none.npz"),
+                  "--debug"])
+    capsys.readouterr()
+
+
+def test_json_creates_its_directory(rs010n_files, tmp_path):
+    js = tmp_path / "new" / "deeper" / "r.json"
+    assert cli.main(["identify", "--robot", "rs010n", "--data", rs010n_files[0], "--method",
+                     "OLS", "--json", str(js)]) == 0
+    assert json.loads(js.read_text())["settings"]["method"] == "OLS"

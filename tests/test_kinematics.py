@@ -9,7 +9,7 @@ import torch
 from conftest import random_dh, random_urdf
 
 import sedsabso_jax as sj
-from sedsabso_jax import _spatial as sp
+from sedsabso_jax.dynamics import spatial as sp
 
 
 @pytest.mark.parametrize("n,seed", [(1, 0), (3, 1), (5, 2), (7, 3)])

@@ -14,9 +14,9 @@ import pytest
 import scipy.signal
 
 import sedsabso_jax as sj
+from sedsabso_jax.identification.metrics import validation_metrics
 from sedsabso_jax.measurements import (
     DEFAULT_CUTOFF_HZ,
-    KUKA_LWR4_TORQUE_LIMITS,
     Measurements,
     differentiate,
     load_kuka_lwr4,
@@ -25,7 +25,6 @@ from sedsabso_jax.measurements import (
     simulate_measurements,
     simulate_measurements_along,
 )
-from sedsabso_jax.metrics import validation_metrics
 
 DATA = resources.files("sedsabso_jax") / "data" / "kuka_lwr4"
 
@@ -80,11 +79,19 @@ def test_kuka_files(run):
     json.dumps(m.info)
 
 
+#: Torque (effort) limits of the KUKA LWR4+ in its URDF [N m], joint 1 to 7.
+KUKA_LWR4_TORQUE_LIMITS = (176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0)
+
+
+@pytest.mark.filterwarnings("ignore:.*Scalar element defined multiple times")
 def test_torque_limits_match_the_urdf():
     root = ET.fromstring((DATA / "kuka_lwr4.urdf").read_text())
     efforts = [float(j.find("limit").get("effort")) for j in root.iter("joint")
                if j.get("type") in ("revolute", "prismatic")]
     assert tuple(efforts) == KUKA_LWR4_TORQUE_LIMITS
+    limits = sj.dynamics.limits.joint_limits("kuka_lwr4", sj.robots.kuka_lwr4())
+    assert tuple(limits.torque_limits) == KUKA_LWR4_TORQUE_LIMITS
+    assert sj.JointLimits.rs010n().torque_limits is None  # Table 3 gives no efforts
 
 
 @pytest.mark.filterwarnings("ignore:.*Scalar element defined multiple times")

@@ -9,7 +9,8 @@ import matplotlib.image
 import numpy as np
 import pytest
 
-from sedsabso_jax import cli, experiment
+from sedsabso_jax import cli
+from sedsabso_jax.reproduce import experiment
 
 SMALL = ["--runs", "2", "--iterations", "30", "--samples", "200", "--design-iterations", "5"]
 FILES = ("table4.md", "table5.md", "fig5_population.png", "fig6_convergence.png",
@@ -112,7 +113,8 @@ def test_bad_arguments_are_one_line(argv, message, tmp_path, capsys):
 
 
 def test_unwritable_json_fails_before_running(tmp_path, capsys):
+    (tmp_path / "file").write_text("not a directory")
     status = _status(["reproduce", *SMALL, "--out", str(tmp_path / "out"),
-                      "--json", str(tmp_path / "missing" / "r.json")])
-    assert status == 2 and "no such directory" in capsys.readouterr().err
+                      "--json", str(tmp_path / "file" / "sub" / "r.json")])
+    assert status == 2 and "is not a directory" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()

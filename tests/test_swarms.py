@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import sedsabso_jax as sj
-from sedsabso_jax.sedsabso import metropolis_accept
-from sedsabso_jax.swarm import phases
+from sedsabso_jax.optim.sedsabso import metropolis_accept
+from sedsabso_jax.optim.swarm import phases, uniforms
 
 # SEDSABSO with 2 compiled phases keeps the suite's compile time down; the phase logic is
 # tested on its own below.
@@ -121,14 +121,14 @@ def test_antenna_difference_matches_two_evaluations():
     diff, bad = problem.antenna_difference(problem.embed(X), problem.embed(V), 0.3)
     np.testing.assert_allclose(diff, expected, rtol=1e-12, atol=1e-9)
     assert not np.any(bad)
-    box = sj.fitness.BlackBox(lambda x, args: jnp.abs(x @ W.T - tau).sum())
+    box = sj.BlackBox(lambda x, args: jnp.abs(x @ W.T - tau).sum())
     diff_bb, _ = box.antenna_difference(jnp.asarray(X), jnp.asarray(V), 0.3)
     np.testing.assert_allclose(diff_bb, expected, rtol=1e-12, atol=1e-9)
 
 
 def test_batched_draws_equal_one_call_per_key():
     keys = jax.random.split(jax.random.key(9), 3)
-    batched = sj.swarm.uniforms(keys, (4, 5), jnp.float64)
+    batched = uniforms(keys, (4, 5), jnp.float64)
     for k, b in zip(keys, batched):
         np.testing.assert_array_equal(b, jax.random.uniform(k, (4, 5), jnp.float64))
 
@@ -136,7 +136,7 @@ def test_batched_draws_equal_one_call_per_key():
 def test_sedsabso_without_annealing():
     """q = 0 is BSO with the shrinking population: no SA trial, no acceptance, and the
     evaluations are exactly 3 per active beetle per iteration plus the initial slots."""
-    solver = sj.SEDSABSO(q=0)
+    solver = sj.SEDSABSO(n_trials=0)
     r = sj.minimise(sphere, solver, -5 * np.ones(4), 5 * np.ones(4), key=jax.random.key(1),
                     iterations=50)
     assert int(r.sa_accepted) == 0 and np.isfinite(float(r.f))
@@ -205,7 +205,7 @@ def test_float32_runs(name):
 @pytest.mark.parametrize("make,call,match", [
     (lambda: sj.SEDSABSO(n_start=0), {}, "n_start must be an integer >= 1"),
     (lambda: sj.BSO(n_beetles=0), {}, "n_beetles must be an integer >= 1"),
-    (lambda: sj.SEDSABSO(q=-1), {}, "q must be an integer >= 0"),
+    (lambda: sj.SEDSABSO(n_trials=-1), {}, "n_trials must be an integer >= 0"),
     (lambda: sj.SEDSABSO(temperature=0.0), {}, "temperature must be > 0"),
     (lambda: sj.SEDSABSO(decay=1.0), {}, r"decay must lie in \(0, 1\)"),
     (lambda: sj.SEDSABSO(decay=0.0), {}, r"decay must lie in \(0, 1\)"),
@@ -249,7 +249,7 @@ def test_runs_shard_over_devices():
 
 
 def test_one_run_is_timed_without_a_second_compilation():
-    from sedsabso_jax.swarm import time_one_of_many
+    from sedsabso_jax.optim.driver import time_one_of_many
 
     box = (-2 * np.ones(3), 2 * np.ones(3))
     solver = sj.BSO(n_beetles=9)

@@ -1,0 +1,111 @@
+"""Writing results: atomic files, plain JSON values, markdown tables, PNG figures.
+
+Every file goes to a temporary file in the target's directory and is then renamed over the
+target. ``os.replace`` is atomic on POSIX and Windows within one file system, so a reader
+sees either the old file or the complete new one, never a half-written file, and a failure
+while writing leaves the old file (or no file) and no temporary file behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import BinaryIO
+
+import numpy as np
+
+
+def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
+    """Call ``write(f)`` on a binary file object opened on a temporary file beside
+    ``path``; flush and fsync it, give it the permissions of the file it replaces (0644
+    for a new one), then move it over ``path``. On any failure the temporary file is
+    removed and an existing ``path`` is left as it was."""
+    path = Path(path)
+    directory = path.parent if str(path.parent) else Path(".")
+    if not directory.is_dir():
+        raise FileNotFoundError(f"{path}: directory {directory} does not exist")
+    mode = (path.stat().st_mode & 0o777) if path.is_file() else 0o644
+    fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.chmod(tmp, mode)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def write_text(path, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically."""
+    return atomic_write(path, lambda f: f.write(text.encode("utf-8")))
+
+
+def jsonable(value):
+    """``value`` as plain JSON values: dicts (keys as strings), lists, str, bool, int,
+    float and None. numpy and JAX arrays become (nested) lists, their scalars Python
+    numbers; NaN and +-Inf become None (JSON has no such numbers). Anything else is a
+    TypeError naming its type."""
+    if value is None or isinstance(value, str):
+        return value
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        value = float(value)
+        return value if math.isfinite(value) else None
+    if hasattr(value, "__array__"):
+        arr = np.asarray(value)
+        return jsonable(arr.tolist() if arr.ndim else arr.item())
+    raise TypeError(f"cannot convert {type(value).__name__} to JSON: {value!r}")
+
+
+def to_json(value) -> str:
+    """Indented JSON text of :func:`jsonable` ``(value)``, with a final newline."""
+    return json.dumps(jsonable(value), indent=2, allow_nan=False) + "\n"
+
+
+def write_json(path, value) -> Path:
+    """Write :func:`to_json` ``(value)`` to ``path`` atomically."""
+    return write_text(path, to_json(value))
+
+
+def markdown_table(head: list[str], rows: list[list[str]]) -> str:
+    """A markdown table with columns padded to equal width."""
+    widths = [max(len(r[k]) for r in [head, *rows]) for k in range(len(head))]
+    fmt = lambda r: "| " + " | ".join(c.ljust(w) for c, w in zip(r, widths)) + " |"  # noqa: E731
+    return "\n".join([fmt(head), "|" + "|".join("-" * (w + 2) for w in widths) + "|",
+                      *(fmt(r) for r in rows)])
+
+
+def pyplot():
+    """``matplotlib.pyplot`` on the non-interactive Agg backend unless one is chosen
+    already (imported here: most runs draw nothing)."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_figure(fig, path) -> None:
+    """Save ``fig`` as PNG atomically and close it."""
+    try:
+        atomic_write(path, lambda f: fig.savefig(f, format="png", dpi=120))
+    finally:
+        pyplot().close(fig)

@@ -1,0 +1,51 @@
+"""Rigid-body transforms in NumPy (float64), used when robots are built.
+
+Homogeneous transforms are 4x4 arrays; a twist or screw is ordered (omega, v) as in
+Lynch & Park, *Modern Robotics* (2017), Sec. 3.3.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def rot_x(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def rot_y(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def rot_z(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rpy_matrix(rpy) -> np.ndarray:
+    """URDF roll-pitch-yaw: R = Rz(yaw) Ry(pitch) Rx(roll) (fixed axes x, y, z)."""
+    r, p, y = (float(v) for v in rpy)
+    return rot_z(y) @ rot_y(p) @ rot_x(r)
+
+
+def transform(rotation=None, translation=None) -> np.ndarray:
+    T = np.eye(4)
+    if rotation is not None:
+        T[:3, :3] = rotation
+    if translation is not None:
+        T[:3, 3] = translation
+    return T
+
+
+def inverse(T: np.ndarray) -> np.ndarray:
+    R, p = T[:3, :3], T[:3, 3]
+    return transform(R.T, -R.T @ p)
+
+
+def adjoint(T: np.ndarray, screw: np.ndarray) -> np.ndarray:
+    """Ad_T applied to a twist (omega, v): (R omega, p x R omega + R v)."""
+    R, p = T[:3, :3], T[:3, 3]
+    w = R @ screw[:3]
+    return np.concatenate([w, np.cross(p, w) + R @ screw[3:]])

@@ -1,0 +1,337 @@
+"""Identify a robot's base parameters from joint data: least squares, weighted least
+squares, the L1 optimum, Levenberg-Marquardt, the swarms, and a physically consistent fit.
+
+Everything here works on arrays (``q, qd, qdd, tau`` of shape ``(samples, n)``); loading
+and filtering measurements is :mod:`sedsabso_jax.measurements`'s job. The torque model
+(friction terms) is :mod:`.model`'s.
+
+Methods: ``"OLS"`` (column-pivoted QR, :mod:`sedsabso_jax.optim.linear`), ``"WLS"`` (OLS
+on rows divided by a per-joint standard deviation ``sigma``; by default Gautier's two-step
+estimate from an OLS pass's residuals), ``"L1"`` (the exact minimiser of the summed absolute
+residual, the paper's Eq. 17, as the dual linear programme with HiGHS), ``"LM"``
+(optimistix Levenberg-Marquardt on the L2 problem), ``"SEDSABSO"``, ``"BSO"``, ``"LDWPSO"``
+(the swarms on the L1 objective, in a box around the a-priori base parameters). Any method
+takes ``sigma``; the swarms and L1 then minimise the weighted L1 norm.
+
+``physical=True`` (with OLS or WLS) fits the full parameters instead, under physical
+consistency (:mod:`.physical`: every link's pseudo-inertia positive definite, friction
+coefficients >= 0; a semidefinite programme solved by Clarabel); ``prior_weight > 0`` adds
+``prior_weight * ||p - prior||^2`` on the full inertial and friction parameters.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Any
+
+import jax
+import numpy as np
+
+from .. import _deprecation
+from .._output import jsonable
+from ..dynamics.base_parameters import BaseParameters, base_parameters
+from ..dynamics.robot import Robot
+from ..optim.baselines import least_squares
+from ..optim.box import box_around, check_bounds
+from ..optim.driver import minimise
+from ..optim.fitness import L1Residual
+from ..optim.linear import factorize, l1_solve
+from ..optim.registry import SWARMS
+from .metrics import nrms_over_limits
+from .model import SMOOTH_VELOCITY, TorqueModel, canonical_friction
+from .physical import PSD_MARGIN, fit_physical
+
+#: The estimators :func:`identify` offers (see the module docstring).
+METHODS = ("OLS", "WLS", "L1", "LM", *SWARMS)
+_UNSET = object()
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Identification:
+    """What :func:`identify` returns.
+
+    Attributes:
+        names: parameter names, base columns then extra columns (``OFF1``, ``FQ1``, ...).
+        values: the identified values, one per name.
+        model: the :class:`~.model.TorqueModel`; ``predict(q, qd, qdd)`` uses it.
+        method: the method name.
+        settings: the settings used (JSON-ready).
+        fit: statistics of the fit residual on the identification data (JSON-ready):
+            per-joint RMS (``rms``), ``l1`` and ``l2`` (sum of |r| and of r^2, weighted as
+            the method saw them), ``nrms_limits_percent`` when ``limits`` were given,
+            ``condition_number`` of the stacked regressor (unit-norm columns), ``rank``.
+        full_params: the full parameters (12 per link) of a physical fit, else ``None``.
+        result: the swarm's :class:`~sedsabso_jax.Result` (all runs) for a swarm
+            (or the baseline's for ``"LM"``), else ``None``.
+    """
+
+    names: tuple[str, ...]
+    values: np.ndarray
+    model: TorqueModel
+    method: str
+    settings: dict
+    fit: dict
+    full_params: np.ndarray | None = None
+    result: Any = None
+
+    def predict(self, q, qd, qdd) -> np.ndarray:
+        """Predicted torques ``(..., n)`` for states ``(..., n)``."""
+        return self.model.predict(self.values, q, qd, qdd)
+
+    def as_dict(self) -> dict:
+        """Names, values, method, settings and fit statistics, JSON-ready."""
+        out = {"method": self.method, "names": self.names, "values": self.values,
+               "settings": self.settings, "fit": self.fit}
+        if self.full_params is not None:
+            out["full_params"] = self.full_params
+        return jsonable(out)
+
+    def __repr__(self) -> str:
+        rms = ", ".join(f"{r:.3g}" for r in self.fit["rms"])
+        return (f"Identification({self.method}, {len(self.names)} parameters, "
+                f"friction={self.model.friction!r}, fit RMS per joint [{rms}])")
+
+
+def _check_data(robot: Robot, q, qd, qdd, tau):
+    """``q, qd, qdd, tau`` as float arrays ``(samples, n)`` of one length, finite."""
+    n = robot.n_joints
+    arrays = []
+    for name, a in (("q", q), ("qd", qd), ("qdd", qdd), ("tau", tau)):
+        a = np.asarray(a, dtype=float)
+        if a.ndim != 2 or a.shape[1] != n:
+            raise ValueError(f"{name} must have shape (samples, {n}) for robot {robot.name!r}, "
+                             f"got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"{name} contains NaN or Inf")
+        arrays.append(a)
+    lengths = {a.shape[0] for a in arrays}
+    if len(lengths) != 1:
+        raise ValueError(f"q, qd, qdd and tau need the same number of samples, got "
+                         f"{[a.shape[0] for a in arrays]}")
+    if arrays[0].shape[0] == 0:
+        raise ValueError("no samples")
+    return arrays
+
+
+def _per_joint(name, value, n, allow_none=True):
+    if value is None and allow_none:
+        return None
+    v = np.asarray(value, dtype=float)
+    if v.shape != (n,) or not np.all(np.isfinite(v)) or np.any(v <= 0):
+        raise ValueError(f"{name} must be {n} positive finite numbers (one per joint), got "
+                         f"{value!r}")
+    return v
+
+
+def identify(robot: Robot, q, qd, qdd, tau, *, method: str = "OLS",
+             friction: str = "viscous-coulomb", sigma=None, limits=None,
+             physical: bool = False, prior=None, prior_weight: float = 0.0,
+             box=(0.5, 0.5), runs: int = 1, iterations: int = 600, seed: int = 0,
+             solver=None, smooth_velocity: float = SMOOTH_VELOCITY,
+             base: BaseParameters | None = None, weights=_UNSET) -> Identification:
+    """Identify the base parameters (plus extra friction terms) of ``robot`` from
+    ``q, qd, qdd, tau`` (each ``(samples, n)``).
+
+    Args:
+        method: one of :data:`METHODS` (see the module docstring).
+        friction: ``"viscous-coulomb"`` plus optional ``"+offset"``, ``"+quadratic"``,
+            ``"+smooth"`` (any order).
+        sigma: per-joint standard deviations; each joint's rows are divided by its sigma
+            (the weights are ``1 / sigma``): ``None`` (equal; for ``"WLS"`` it means
+            ``"residual"``), ``"residual"`` (Gautier's two-step WLS: the RMS of each
+            joint's OLS residual, corrected for the parameters on that joint), ``"limits"``
+            (the torque ``limits``, which makes the L2 objective the squared
+            NRMS-over-limits error), or ``n`` positive numbers.
+        limits: per-joint torque limits (N m): the fit reports its NRMS over them; needed
+            by ``sigma="limits"``.
+        physical: fit physically consistent full parameters (OLS / WLS only).
+        prior: full a-priori parameters (12 per link); default ``robot.params``. Centre of
+            the swarms' box (projected on the base; extras centred on 0) and target of
+            ``prior_weight``.
+        prior_weight: weight of ``||p - prior||^2`` in a physical fit.
+        box: the swarms' box: ``(fraction, floor)`` gives centre ``+- max(fraction
+            |centre|, floor)`` (:func:`~sedsabso_jax.optim.box_around`); or explicit
+            ``(lower, upper)`` arrays of length ``dim``.
+        runs, iterations, seed, solver: swarm runs (the best is kept), iterations, PRNG
+            seed, and a solver instance (default: the method's ``.paper()`` settings).
+        smooth_velocity: the "smooth" Coulomb term's ``tanh(qd / smooth_velocity)``.
+        base: a precomputed ``base_parameters(robot)`` (computed when ``None``).
+        weights: deprecated name of ``sigma``.
+
+    Warns (``UserWarning``) with the condition number and the names of the columns
+    concerned when the stacked regressor is rank deficient or poorly conditioned.
+    """
+    if weights is not _UNSET:
+        _deprecation.warn("identify(weights=...)", "sigma=...")
+        sigma = weights
+    if not isinstance(robot, Robot):
+        raise TypeError(f"robot must be a sedsabso_jax.Robot, got {type(robot).__name__}")
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    friction = canonical_friction(friction)
+    n = robot.n_joints
+    q, qd, qdd, tau = _check_data(robot, q, qd, qdd, tau)
+    limits = _per_joint("limits", limits, n)
+    if physical and method not in ("OLS", "WLS"):
+        raise ValueError(f"physical=True is a least-squares fit: use method 'OLS' or 'WLS', "
+                         f"not {method!r}")
+    if not (np.isfinite(prior_weight) and prior_weight >= 0):
+        raise ValueError(f"prior_weight must be >= 0, got {prior_weight!r}")
+    if not (np.isfinite(smooth_velocity) and smooth_velocity > 0):
+        raise ValueError(f"smooth_velocity must be > 0, got {smooth_velocity!r}")
+    if method in SWARMS:
+        for name, v in (("runs", runs), ("iterations", iterations)):
+            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
+                raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
+    prior = np.asarray(robot.params if prior is None else prior, dtype=float)
+    if prior.shape != (robot.n_params,) or not np.all(np.isfinite(prior)):
+        raise ValueError(f"prior must be {robot.n_params} finite full parameters (12 per "
+                         f"link), got shape {prior.shape}")
+    if base is None:
+        base = base_parameters(robot)
+    elif not isinstance(base, BaseParameters) or base.robot.n_params != robot.n_params:
+        raise ValueError("base must be base_parameters(robot) of this robot")
+    model = TorqueModel(base, friction, float(smooth_velocity))
+
+    # row weights 1 / sigma
+    if isinstance(sigma, str):
+        if sigma not in ("residual", "limits"):
+            raise ValueError(f"sigma must be None, 'residual', 'limits' or {n} positive "
+                             f"numbers, got {sigma!r}")
+        kind = sigma
+    elif sigma is None:
+        kind = "residual" if method == "WLS" else "equal"
+    else:
+        kind = "given"
+        given = _per_joint("sigma", sigma, n, allow_none=False)
+    if kind == "limits" and limits is None:
+        raise ValueError("sigma='limits' needs limits=(one torque limit per joint)")
+
+    if method in SWARMS:
+        solver = _check_swarm_settings(method, solver, box, model.dim)
+
+    t0 = time.perf_counter()
+    Y = model.regressor(q, qd, qdd)  # (T, n, d)
+    T, d = Y.shape[0], Y.shape[-1]
+    W0, tau0 = Y.reshape(-1, d), tau.reshape(-1)
+    names = model.names
+    factor0 = factorize(W0, tau0)
+    factor0.warn("identify: the stacked regressor", names)
+
+    if kind == "equal":
+        sigma = np.ones(n)
+    elif kind == "limits":
+        sigma = limits
+    elif kind == "given":
+        sigma = given
+    else:  # Gautier: sigma_j^2 = ||r_j||^2 / (T - d_j), d_j = parameters acting on joint j
+        r = Y @ factor0.solve() - tau
+        d_j = np.count_nonzero(np.any(Y != 0, axis=0), axis=-1)
+        sigma = np.sqrt(np.sum(r ** 2, axis=0) / np.maximum(T - d_j, 1))
+        sigma = np.where(sigma > 0, sigma, max(sigma.max(), 1e-12))
+    if kind == "equal":
+        W, b, factor = W0, tau0, factor0
+    else:
+        row = np.tile(1.0 / sigma, T)
+        W, b = W0 * row[:, None], tau0 * row
+        factor = factorize(W, b) if method in ("OLS", "WLS") else None
+
+    result, full, extra = None, None, {}
+    if physical:
+        fit_p = fit_physical(model, factor, prior, float(prior_weight))
+        x, full = fit_p.values, fit_p.full_params
+        extra["physical_fit"] = {"solver": fit_p.solver, "status": fit_p.status,
+                                 "iterations": fit_p.iterations, "seconds": fit_p.seconds}
+    elif method in ("OLS", "WLS"):
+        x = factor.solve()
+    elif method == "L1":
+        x, extra["lp_iterations"] = l1_solve(W, b)
+    elif method == "LM":
+        norms = np.linalg.norm(W, axis=0)
+        scale = np.where(norms > 0, norms, 1.0)
+        result = least_squares(L1Residual(W / scale, b), "LM")
+        x = np.asarray(result.x, dtype=float) / scale
+        extra.update(steps=int(result.n_evaluations), compile_s=float(result.compile_s),
+                     run_s=float(result.run_s))
+    else:
+        x, result, extra = _swarm(method, model, W, b, prior, box, runs, iterations, seed,
+                                  solver)
+    run_s = time.perf_counter() - t0
+
+    r = Y @ x - tau
+    rms = np.sqrt(np.mean(r ** 2, axis=0))
+    rw = (W @ x - b)
+    fit = {"rms": rms, "l1": float(np.abs(rw).sum()), "l2": float(rw @ rw),
+           "condition_number": factor0.condition_number, "rank": factor0.rank,
+           "samples": int(T), "seconds": float(run_s)}
+    if limits is not None:
+        fit["nrms_limits_percent"] = float(np.mean(nrms_over_limits(rms, limits)))
+    settings = {"method": method, "friction": friction, "physical": bool(physical),
+                "weights": kind, "sigma": sigma, "limits": limits}
+    if "smooth" in friction:
+        settings["smooth_velocity"] = float(smooth_velocity)
+    if physical:
+        settings.update(prior_weight=float(prior_weight), psd_margin=PSD_MARGIN)
+    settings.update(extra)
+    return Identification(names=names, values=np.asarray(x, dtype=float), model=model,
+                          method=method, settings=jsonable(settings), fit=jsonable(fit),
+                          full_params=full, result=result)
+
+
+def _swarm(method, model, W, b, prior, box, runs, iterations, seed, solver):
+    """The swarm ``solver`` on the weighted L1 objective in the box; the best of the runs."""
+    d = model.dim
+    centre = np.concatenate([np.asarray(model.base.project(prior)),
+                             np.zeros(d - model.base.rank)])
+    box_setting: Any
+    lo_hi = _box_arrays(box, d)
+    if lo_hi is None:
+        fraction, floor = (float(v) for v in box)
+        lower, upper = box_around(centre, fraction, floor)
+        box_setting = {"fraction": fraction, "floor": floor, "centre": "prior"}
+    else:
+        lower, upper = lo_hi
+        box_setting = "explicit"
+    res = minimise(L1Residual(W, b), solver, lower, upper, key=jax.random.key(seed),
+                   iterations=int(iterations), runs=int(runs))
+    X, f = np.atleast_2d(np.asarray(res.x)), np.atleast_1d(np.asarray(res.f))
+    best = int(np.argmin(f))
+    hyper = {fld.name: getattr(solver, fld.name) for fld in dataclasses.fields(solver)}
+    extra = {"box": box_setting, "runs": int(runs), "iterations": int(iterations),
+             "seed": int(seed), "solver": hyper, "best_run": best,
+             "f_runs": [float(v) for v in f], "compile_s": float(res.compile_s),
+             "run_s": float(res.run_s)}
+    return X[best], res, extra
+
+
+def _check_swarm_settings(method, solver, box, d):
+    """The solver (default: the method's ``.paper()``), after checking it and the box."""
+    if solver is None:
+        solver = SWARMS[method].paper()
+    elif type(solver) is not SWARMS[method]:
+        raise ValueError(f"solver must be a {method} instance for method {method!r}, got "
+                         f"{type(solver).__name__}")
+    solver.check()
+    explicit = _box_arrays(box, d)
+    if explicit is None:
+        box_around(np.zeros(1), *box)  # checks (fraction, floor)
+    else:
+        check_bounds(*explicit, d)
+    return solver
+
+
+def _box_arrays(box, d):
+    """``(lower, upper)`` arrays if ``box`` is explicit bounds, ``None`` if (fraction, floor)."""
+    try:
+        a, b = box
+    except (TypeError, ValueError):
+        raise ValueError(f"box must be (fraction, floor) or (lower, upper) arrays, got "
+                         f"{box!r}") from None
+    if np.ndim(a) == 0 and np.ndim(b) == 0:
+        return None
+    lower, upper = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if lower.shape != (d,) or upper.shape != (d,):
+        raise ValueError(f"box bounds must both have shape ({d},), got {lower.shape} and "
+                         f"{upper.shape}")
+    return lower, upper

@@ -1,0 +1,86 @@
+"""Loading measurements from files: read, check, derive what is missing, filter, downsample."""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+from . import formats
+from .container import Measurements, check_fields, positive_int
+from .signal import BUTTERWORTH_ORDER, DEFAULT_CUTOFF_HZ, differentiate, lowpass, median_rate
+
+
+def load_measurements(path, *, n_joints: int | None = None, cutoff_hz: float | None = None,
+                      filter_torques: bool = False, downsample: int = 1,
+                      derive: bool = False) -> Measurements:
+    """Read measurements from a ``.npz`` or ``.csv`` file (formats: :mod:`.formats`).
+
+    Args:
+        path: the file; its suffix (``.npz`` or ``.csv``, any case) picks the format.
+        n_joints: if given, the file must have this many joints (e.g. ``robot.n_joints``).
+        cutoff_hz: low-pass cutoff for what is filtered (default
+            :data:`DEFAULT_CUTOFF_HZ`); must lie below half the median sample rate.
+            Unused when nothing is derived or filtered.
+        filter_torques: low-pass the torques too (same zero-phase filter).
+        downsample: keep every ``downsample``-th sample, after derivation and filtering.
+        derive: derive velocities and accelerations from the positions even where the
+            file has them (see :func:`differentiate`); missing ones are always derived.
+
+    Positions are kept as recorded. ``info`` records, for velocities, accelerations and
+    torques, ``"recorded"`` or how they were obtained, and the cutoff used.
+    """
+    path = Path(path)
+    source = str(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{source}: no such file")
+    if n_joints is not None:
+        n_joints = positive_int("n_joints", n_joints)
+    downsample = positive_int("downsample", downsample)
+    suffix = path.suffix.lower()
+    if suffix not in (".npz", ".csv"):
+        raise ValueError(f"{source}: unsupported file type {path.suffix!r}; expected .npz "
+                         f"or .csv")
+    if path.stat().st_size == 0:
+        raise ValueError(f"{source}: the file is empty (0 bytes); expected "
+                         f"{'an .npz archive' if suffix == '.npz' else 'a CSV header and data'}")
+    if suffix == ".npz":
+        raw, info = formats.read_npz(path, source)
+    else:
+        raw, info = formats.read_csv(path, source, n_joints)
+    fields = check_fields(source, raw, n_joints)
+    times = fields["times"]
+    rate = median_rate(times)
+    cutoff = DEFAULT_CUTOFF_HZ if cutoff_hz is None else cutoff_hz
+    info.update({"format": suffix[1:], "rate_hz": rate, "cutoff_hz": None,
+                 "filter": None, "velocities": "recorded", "accelerations": "recorded",
+                 "torques": "recorded", "downsample": downsample})
+    filt = (f"Butterworth low-pass, order {BUTTERWORTH_ORDER}, zero phase (sosfiltfilt), "
+            f"{float(cutoff):g} Hz at the median rate {rate:.6g} Hz")
+    need = [k for k in ("velocities", "accelerations") if derive or fields[k] is None]
+    if need:
+        qd, qdd = differentiate(times, fields["positions"], cutoff, source=source)
+        for key, value in (("velocities", qd), ("accelerations", qdd)):
+            if key in need:
+                fields[key] = value
+                info[key] = "derived from positions: low-pass, then np.gradient on times"
+        info["cutoff_hz"], info["filter"] = float(cutoff), filt
+    if filter_torques:
+        fields["torques"] = lowpass(fields["torques"], rate, cutoff, source=source)
+        info["torques"] = "recorded, low-passed"
+        info["cutoff_hz"], info["filter"] = float(cutoff), filt
+    index = slice(None, None, downsample)
+    return Measurements(times[index], fields["positions"][index], fields["velocities"][index],
+                        fields["accelerations"][index], fields["torques"][index],
+                        source=source, info=info)
+
+
+def load_kuka_lwr4(run: int = 1, **kwargs) -> Measurements:
+    """FloBaRoID's real KUKA LWR4+ recording ``run`` (1 or 2), shipped with the package
+    (``data/kuka_lwr4/measurements_<run>.npz``, LGPL-3.0; see its SOURCE.md). Keyword
+    arguments go to :func:`load_measurements`."""
+    if run not in (1, 2):
+        raise ValueError(f"run must be 1 or 2 (measurements_1.npz, measurements_2.npz), "
+                         f"got {run!r}")
+    resource = resources.files("sedsabso_jax") / "data" / "kuka_lwr4" / f"measurements_{run}.npz"
+    with resources.as_file(resource) as path:
+        return load_measurements(path, **kwargs)

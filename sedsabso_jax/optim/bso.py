@@ -1,0 +1,103 @@
+"""Beetle Swarm Optimisation (BSO): T. Wang, L. Yang, Q. Liu, "Beetle Swarm Optimization
+Algorithm: Theory and Application", arXiv:1808.00206 (2018); the paper's Eq. 10-13.
+
+Per iteration, for every beetle at once (the authors' demo code, ``docs/paper-notes.md``
+Sec. 3)::
+
+    xl = x + V d/2,  xr = x - V d/2                 # antennae, d = delta / c (Eq. 13)
+    xi = -delta V sign(f(xl) - f(xr))               # toward the better antenna (Eq. 12)
+    V  = clip(w V + c1 r1 (pbest - x) + c2 r2 (g - x), -Vmax, Vmax)      (Eq. 11)
+    x  = clip(x + lam V + (1 - lam) xi, lower, upper)                    (Eq. 10)
+
+The authors' code uses ``+delta V sign(...)``, which moves toward the WORSE antenna when
+minimising; ``literal_sign=True`` restores it. With a linear fitness embedding (Eq. 17)
+the antennae cost no product with ``W`` (``W xl = W x + d/2 W V``) and only their
+difference is needed, one pass over the residuals (``|r + g| - |r - g|`` summed), so an
+iteration costs two products with ``W`` (new positions and velocities) for 3 evaluations.
+
+:class:`BeetleSwarm` holds this step and its hyperparameters; :class:`BSO` runs it with a
+constant population, :class:`~sedsabso_jax.SEDSABSO` adds annealing and a shrinking one.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+
+from .swarm import (
+    AbstractSwarm,
+    check_population,
+    check_velocity_update,
+    evaluate,
+    uniforms,
+    update_bests,
+)
+
+
+class BeetleSwarm(AbstractSwarm):
+    """The beetle update of Eq. 10-13 and its hyperparameters (defaults: the paper's Sec.
+    5.2); the population and the guide are the subclass's."""
+
+    c1: float = 2.0  # c1: cognitive coefficient (Eq. 11)
+    c2: float = 2.0  # c2: social coefficient (Eq. 11)
+    w: float = 0.8  # w: inertia weight (Eq. 11)
+    lam: float = 0.9  # lambda: share of the velocity step vs the antenna step (Eq. 10)
+    delta: float = 0.05  # delta: antenna step size, constant (Eq. 12)
+    c: float = 2.0  # c: ratio of step size to antenna distance, d = delta / c (Eq. 13)
+    vmax_fraction: float = 0.5  # Vmax = vmax_fraction * (upper - lower), the authors' code
+    literal_sign: bool = False  # True: the authors' sign, toward the worse antenna
+
+    def check(self) -> None:
+        check_velocity_update(self.c1, self.c2, self.vmax_fraction)
+        if not 0.0 <= self.lam <= 1.0:
+            raise ValueError(f"lam must lie in [0, 1], got {self.lam}")
+        if self.delta <= 0 or self.c <= 0:
+            raise ValueError(f"delta and c must be > 0, got delta={self.delta}, c={self.c}")
+
+    def beetle_step(self, fitness, s, lower, upper, r1, r2):
+        """Eq. 10-13 for every slot, with ``r1, r2`` the uniform draws of Eq. 11; returns
+        the state with bests updated and the swarm's global best (x, f) among the active
+        slots."""
+        d = self.delta / self.c
+        diff, bad_a = fitness.antenna_difference(s.ex, s.ev, 0.5 * d)  # f(xl) - f(xr)
+        bad_a = jnp.sum(jnp.where(s.active, bad_a, 0), dtype=jnp.int32)
+        direction = jnp.nan_to_num(jnp.sign(diff))  # inf - inf: no preference
+        if not self.literal_sign:
+            direction = -direction
+        xi = self.delta * s.v * direction[:, None]
+        vmax = self.vmax_fraction * (upper - lower)
+        v = self.w * s.v + self.c1 * r1 * (s.pbest_x - s.x) + self.c2 * r2 * (s.guide_x - s.x)
+        v = jnp.clip(v, -vmax, vmax)
+        x = jnp.clip(s.x + self.lam * v + (1.0 - self.lam) * xi, lower, upper)
+        ex, ev = fitness.embed(x), fitness.embed(v)
+        f, bad = evaluate(fitness, ex, s.active)
+        n_active = jnp.sum(s.active, dtype=jnp.int32)
+        s = eqx.tree_at(
+            lambda s: (s.v, s.ev, s.n_evaluations, s.n_nonfinite), s,
+            (v, ev, s.n_evaluations + 3 * n_active, s.n_nonfinite + bad + bad_a))
+        return update_bests(s, x, ex, f)
+
+
+class BSO(BeetleSwarm):
+    """Beetle swarm with a constant population. Defaults: the paper's Sec. 5.2."""
+
+    n_beetles: int = 50  # N: population size
+
+    @classmethod
+    def paper(cls) -> BSO:
+        """The paper's settings (Sec. 5.2): N = 50, c1 = c2 = 2, w = 0.8, lambda = 0.9,
+        delta = 0.05, c = 2; Vmax = 0.5 (ub - lb) as in the authors' code."""
+        return cls()
+
+    @property
+    def n_slots(self) -> int:
+        return self.n_beetles
+
+    def check(self) -> None:
+        check_population(self.n_beetles, "n_beetles")
+        super().check()
+
+    def step(self, fitness, s, t, iterations, lower, upper, keys):
+        r1, r2 = uniforms(keys, s.x.shape, s.x.dtype)
+        s, (gx, gf) = self.beetle_step(fitness, s, lower, upper, r1, r2)
+        return eqx.tree_at(lambda s: (s.guide_x, s.guide_f), s, (gx, gf))
