@@ -68,11 +68,24 @@ def test_readme_commands_match_ci():
 
 
 def test_readme_examples_run():
-    """The README's Python examples execute as written, in order."""
+    """The README's Python examples execute as written, in order, and print what their
+    comments say: each ``print(...)  # text`` line's output matches ``text``, with ``...``
+    standing for anything (a time, say)."""
+    import contextlib
+    import io
+
     readme = (ROOT / "README.md").read_text()
     namespace: dict = {}
+    expected, out = [], io.StringIO()
     for example in re.findall(r"```python\n(.*?)```", readme, flags=re.S):
-        exec(compile(example, "README.md", "exec"), namespace)  # noqa: S102
+        expected += re.findall(r"^print\(.*\)\s+# (.*)$", example, flags=re.M)
+        with contextlib.redirect_stdout(out):
+            exec(compile(example, "README.md", "exec"), namespace)  # noqa: S102
+    printed = out.getvalue().splitlines()
+    assert len(printed) == len(expected) == 3
+    for line, comment in zip(printed, expected):
+        pattern = ".*".join(re.escape(part) for part in comment.split("..."))
+        assert re.fullmatch(pattern, line.strip()), (line, comment)
     assert namespace["Y"].shape == (1000, 3, 36)
     assert namespace["r"].x.shape == (10, 21)
     assert float(namespace["floor"].f) <= float(namespace["r"].f.min())

@@ -9,7 +9,6 @@ import torch
 from conftest import random_dh, random_urdf
 
 import sedsabso_jax as sj
-from sedsabso_jax.dynamics import spatial as sp
 
 
 @pytest.mark.parametrize("n,seed", [(1, 0), (3, 1), (5, 2), (7, 3)])
@@ -30,13 +29,21 @@ def test_forward_kinematics_matches_pytorch_kinematics(tmp_path, n, seed):
 
 
 def _mdh(alpha, a, theta, d):
-    return (sp.transform(sp.rot_x(alpha)) @ sp.transform(translation=(a, 0, 0))
-            @ sp.transform(sp.rot_z(theta)) @ sp.transform(translation=(0, 0, d)))
+    """Craig's modified-DH link transform, written out (Craig, 3rd ed., Eq. 3.6)."""
+    ca, sa, ct, st = np.cos(alpha), np.sin(alpha), np.cos(theta), np.sin(theta)
+    return np.array([[ct, -st, 0.0, a],
+                     [st * ca, ct * ca, -sa, -sa * d],
+                     [st * sa, ct * sa, ca, ca * d],
+                     [0.0, 0.0, 0.0, 1.0]])
 
 
 def _dh(theta, d, a, alpha):
-    return (sp.transform(sp.rot_z(theta)) @ sp.transform(translation=(0, 0, d))
-            @ sp.transform(translation=(a, 0, 0)) @ sp.transform(sp.rot_x(alpha)))
+    """The standard (distal) DH link transform, written out."""
+    ca, sa, ct, st = np.cos(alpha), np.sin(alpha), np.cos(theta), np.sin(theta)
+    return np.array([[ct, -st * ca, st * sa, a * ct],
+                     [st, ct * ca, -ct * sa, a * st],
+                     [0.0, sa, ca, d],
+                     [0.0, 0.0, 0.0, 1.0]])
 
 
 @pytest.mark.parametrize("convention", ["mdh", "dh"])

@@ -67,10 +67,19 @@ def test_metropolis_acceptance_rate(f_new, f_old, T, p):
 
 
 @pytest.mark.parametrize("name", SOLVERS)
+# Tolerances: 10x the best of the 4 runs measured on the 2-core AMD EPYC VM (2026-11-23),
+# measured value in the comment. Rastrigin's nearest local minima score 0.995: every
+# tolerance there is far below, so a swarm stuck in one fails.
 @pytest.mark.parametrize("fn,dim,half,tol", [
-    (sphere, 10, 5.0, {"SEDSABSO": 0.5, "BSO": 0.05, "LDWPSO": 1e-4}),
-    (rosenbrock, 2, 2.0, {"SEDSABSO": 0.05, "BSO": 0.05, "LDWPSO": 1e-3}),
-    (rastrigin, 2, 5.12, {"SEDSABSO": 1.0, "BSO": 1.0, "LDWPSO": 1.0}),
+    (sphere, 10, 5.0, {"SEDSABSO": 2e-2,  # 1.8e-3
+                       "BSO": 6e-3,  # 5.6e-4
+                       "LDWPSO": 1e-8}),  # 1.0e-9
+    (rosenbrock, 2, 2.0, {"SEDSABSO": 5e-6,  # 5.3e-7
+                          "BSO": 4e-8,  # 3.9e-9
+                          "LDWPSO": 3e-12}),  # 2.3e-13
+    (rastrigin, 2, 5.12, {"SEDSABSO": 1e-10,  # 0.0 (best of 4; the others 1e-12)
+                          "BSO": 1e-12,  # 9.9e-14
+                          "LDWPSO": 1e-10}),  # 0.0
 ])
 def test_reaches_documented_tolerance(name, fn, dim, half, tol):
     """Best of 4 runs of 300 iterations from the whole box; the tolerances are this
@@ -254,8 +263,24 @@ def test_one_run_is_timed_without_a_second_compilation():
     box = (-2 * np.ones(3), 2 * np.ones(3))
     solver = sj.BSO(n_beetles=9)
     kw = dict(key=jax.random.key(3), iterations=40)
-    many = sj.minimise(rosenbrock, solver, *box, runs=4, **kw)
+    sj.minimise(rosenbrock, solver, *box, runs=4, **kw)  # compiles the batched executable
     compile_s, run_s = time_one_of_many(rosenbrock, solver, *box, runs=4, **kw)
     if jax.default_backend() == "cpu" and jax.device_count() == 1:
         assert compile_s == 0.0  # the batched executable, already compiled, runs one run
-    assert 0.0 < run_s < 10 * max(many.run_s, 1e-3)
+    assert run_s > 0.0  # how long it takes is the benchmark's business, not a unit test's
+
+
+@pytest.mark.parametrize("name, f_runs, x00", [
+    ("SEDSABSO", (0.9488408946863195, 0.7420115581537542), 0.7267455149914717),
+    ("BSO", (0.7238839720397102, 0.8178445960378995), 0.5717979263388009),
+    ("LDWPSO", (0.3746915547095892, 0.21844601599271482), 0.6867452795819949),
+])
+def test_seeded_runs_are_pinned(name, f_runs, x00):
+    """A seed's numbers do not drift between versions: 2 runs of 25 iterations on
+    Rosenbrock, key 42, as measured on the project's 2-core AMD EPYC VM (jax 0.10.2); a
+    change to the random stream, the update rules or their order changes them. The
+    tolerance (1e-9 relative) allows for floating-point reassociation on other CPUs."""
+    r = sj.minimise(rosenbrock, SOLVERS[name], -2 * np.ones(3), 2 * np.ones(3),
+                    key=jax.random.key(42), iterations=25, runs=2)
+    np.testing.assert_allclose(np.asarray(r.f), f_runs, rtol=1e-9)
+    assert float(np.asarray(r.x)[0, 0]) == pytest.approx(x00, rel=1e-9)

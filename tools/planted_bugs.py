@@ -1,0 +1,157 @@
+"""Mutation testing by planted bugs: each bug is applied to a scratch copy of the package,
+the relevant tests run on that copy, and the bug must make them fail ("killed").
+
+    python tools/planted_bugs.py                 # every bug (about 10-20 minutes, 2 cores)
+    python tools/planted_bugs.py --only 3 5      # some of them
+    python tools/planted_bugs.py --list
+
+Each bug is one textual replacement in one module: a wrong sign, a dropped term, an
+off-by-one schedule, a loosened tolerance, the kind of slip the swarm, fitness, driver and
+least-squares code could plausibly contain. A bug that survives is either killed by a new
+test or listed below, with the reason it is equivalent. The tool prints a markdown table
+and exits with status 1 if any bug not marked equivalent survives.
+
+Not part of the test suite (too slow for CI); run it after changing the modules it covers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+FAST = ["tests/test_swarm_steps.py", "tests/test_linear.py"]
+SWARMS = [*FAST, "tests/test_swarms.py"]
+BASELINES = [*FAST, "tests/test_baselines.py", "tests/test_identification.py"]
+
+#: (module, text, replacement, what the bug is, tests to run, reason if equivalent)
+BUGS = [
+    ("optim/sedsabso.py", "return jnp.exp(-(f_new - f_old) / temperature) > u",
+     "return jnp.exp((f_new - f_old) / temperature) > u",
+     "Metropolis rule with its sign flipped", SWARMS, None),
+    ("optim/sedsabso.py", "s.temperature * self.decay))\n\n\n",
+     "s.temperature))\n\n\n", "the temperature never cools", SWARMS, None),
+    ("optim/sedsabso.py", "e = self.exponent_start + (self.exponent_end - self.exponent_start) * t",
+     "e = self.exponent_end + (self.exponent_start - self.exponent_end) * t",
+     "Eq. 15-16 in the increasing form", SWARMS, None),
+    ("optim/swarm.py",
+     "order = jnp.argsort(jnp.where(state.active, state.pbest_f, jnp.inf))\n    rank",
+     "order = jnp.argsort(jnp.where(state.active, -state.pbest_f, jnp.inf))\n    rank",
+     "the best beetles leave first when N(t) falls", SWARMS, None),
+    ("optim/sedsabso.py", "gx = jnp.where(chosen >= 0, cand[jnp.maximum(chosen, 0)], guide_x)",
+     "gx = guide_x", "an accepted annealing candidate never becomes the guide", SWARMS, None),
+    ("optim/sedsabso.py", "cand = jnp.clip(gx * (1.0 + self.perturbation_scale * r), lower, upper)",
+     "cand = jnp.clip(gx * (1.0 + self.perturbation_scale * (r - 0.5)), lower, upper)",
+     "Eq. 14 as P_g (1 + (r - 0.5))", SWARMS, None),
+    ("optim/sedsabso.py", "accept = metropolis_accept(u[k], fc[k], guide_f, s.temperature)",
+     "accept = metropolis_accept(u[k], fc[k], gf, s.temperature)",
+     "Metropolis against the swarm's best, not the current guide", SWARMS, None),
+    ("optim/sedsabso.py", "swarm_better = gf < s.guide_f", "swarm_better = gf > s.guide_f",
+     "the guide takes the swarm's best only when it is worse", SWARMS, None),
+    ("optim/sedsabso.py", "better = fc[i] < s.best_f", "better = fc[i] < jnp.inf",
+     "the best ever is overwritten by the best candidate", SWARMS, None),
+    ("optim/bso.py", "        if not self.literal_sign:\n            direction = -direction\n",
+     "", "the antenna step toward the worse antenna (the literal sign always)", SWARMS, None),
+    ("optim/bso.py", "d = self.delta / self.c", "d = self.delta * self.c",
+     "antenna distance delta c instead of delta / c (Eq. 13)", SWARMS, None),
+    ("optim/bso.py", "        v = jnp.clip(v, -vmax, vmax)\n        x = jnp.clip(s.x + self.lam",
+     "        x = jnp.clip(s.x + self.lam", "no velocity clamp in BSO", SWARMS, None),
+    ("optim/bso.py", "x = jnp.clip(s.x + self.lam * v + (1.0 - self.lam) * xi, lower, upper)",
+     "x = s.x + self.lam * v + (1.0 - self.lam) * xi", "no box clip in BSO", SWARMS, None),
+    ("optim/bso.py", "s.n_evaluations + 3 * n_active", "s.n_evaluations + 2 * n_active",
+     "BSO counts two evaluations per beetle, not three", SWARMS, None),
+    ("optim/ldwpso.py", "t / max(iterations - 1, 1)", "t / iterations",
+     "LDWPSO's inertia never reaches w_end", SWARMS, None),
+    ("optim/ldwpso.py", "+ self.c2 * r2 * (s.guide_x - s.x)", "+ self.c2 * r1 * (s.guide_x - s.x)",
+     "LDWPSO reuses r1 for the social term", SWARMS, None),
+    ("optim/swarm.py", "better = state.active & (f < state.pbest_f)", "better = f < state.pbest_f",
+     "inactive slots keep updating their personal bests", SWARMS, None),
+    ("optim/swarm.py", "masked = jnp.where(state.active, pbest_f, jnp.inf)", "masked = pbest_f",
+     "inactive slots can become the swarm's best", SWARMS, None),
+    ("optim/swarm.py",
+     "order = jnp.argsort(jnp.where(state.active, state.pbest_f, jnp.inf))[:slots]",
+     "order = jnp.arange(state.pbest_f.shape[0])[:slots]",
+     "a shrinking phase keeps the first slots, not the best", SWARMS, None),
+    ("optim/fitness.py", "return jnp.where(jnp.isfinite(f), f, jnp.inf)", "return f",
+     "NaN fitness is not mapped to +Inf", SWARMS, None),
+    ("optim/fitness.py", "diff = _row_sum(jnp.abs(R + a * G) - jnp.abs(R - a * G))",
+     "diff = _row_sum(jnp.abs(R - a * G) - jnp.abs(R + a * G))",
+     "Eq. 17's one-pass antenna difference with its sign flipped", SWARMS, None),
+    ("optim/driver.py", "            if not constant:  # re-rank only when N(t) falls",
+     "            if False:  # re-rank only when N(t) falls",
+     "the population is never re-ranked when N(t) falls", SWARMS, None),
+    ("optim/driver.py", "        key, sub = jax.random.split(key)\n        return key, sub",
+     "        key, sub = jax.random.split(key)\n        return key, key",
+     "every iteration draws from the same chain key", SWARMS, None),
+    ("optim/linear.py", "RANK_RTOL = 1e-10", "RANK_RTOL = 1e-4",
+     "a loose rank tolerance", BASELINES, None),
+    ("optim/linear.py", "        scale = _scale(self.norms[self.perm])\n",
+     "        scale = np.ones(d)\n", "minimum-norm solution on raw, not unit-norm, columns",
+     BASELINES, None),
+    ("optim/linear.py", "    Rs = R / _scale(norms[perm])", "    Rs = R",
+     "rank and conditioning judged on raw columns", BASELINES, None),
+    ("optim/box.py", "half = np.maximum(fraction * np.abs(centre), floor)",
+     "half = fraction * np.abs(centre) + floor", "the box rule adds the floor", BASELINES,
+     None),
+]
+
+
+def run(index: int, bug, python: str, keep: bool) -> tuple[str, float]:
+    module, text, replacement, what, tests, equivalent = bug
+    scratch = Path(tempfile.mkdtemp(prefix=f"planted-{index}-"))
+    try:
+        shutil.copytree(ROOT / "sedsabso_jax", scratch / "sedsabso_jax")
+        shutil.copytree(ROOT / "tests", scratch / "tests")
+        shutil.copy(ROOT / "pyproject.toml", scratch / "pyproject.toml")
+        target = scratch / "sedsabso_jax" / module
+        source = target.read_text()
+        if source.count(text) != 1:
+            return f"NOT APPLIED (the text occurs {source.count(text)} times)", 0.0
+        target.write_text(source.replace(text, replacement))
+        env = dict(os.environ, PYTHONPATH=str(scratch))  # before the installed package
+        t0 = time.perf_counter()
+        proc = subprocess.run([python, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
+                               *tests], cwd=scratch, env=env, capture_output=True, text=True)
+        seconds = time.perf_counter() - t0
+        if "sedsabso_jax" not in proc.stdout + proc.stderr and proc.returncode not in (0, 1):
+            return f"ERROR (pytest exit {proc.returncode})", seconds
+        if proc.returncode == 0:
+            return "survived" + (f" (equivalent: {equivalent})" if equivalent else ""), seconds
+        failed = [line.split(" ")[1] for line in proc.stdout.splitlines()
+                  if line.startswith("FAILED")]
+        return f"killed by {failed[0] if failed else 'an error'}", seconds
+    finally:
+        if not keep:
+            shutil.rmtree(scratch, ignore_errors=True)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--only", type=int, nargs="*", help="bug numbers (1-based)")
+    ap.add_argument("--list", action="store_true", help="list the bugs and exit")
+    ap.add_argument("--keep", action="store_true", help="keep the scratch copies")
+    args = ap.parse_args(argv)
+    chosen = args.only or range(1, len(BUGS) + 1)
+    if args.list:
+        for i in chosen:
+            print(f"{i:2d}. sedsabso_jax/{BUGS[i - 1][0]}: {BUGS[i - 1][3]}")
+        return 0
+    print("| # | planted bug | module | result | seconds |")
+    print("|---|---|---|---|---|")
+    survivors = 0
+    for i in chosen:
+        bug = BUGS[i - 1]
+        result, seconds = run(i, bug, sys.executable, args.keep)
+        survivors += not result.startswith("killed") and "equivalent" not in result
+        print(f"| {i} | {bug[3]} | `{bug[0]}` | {result} | {seconds:.0f} |", flush=True)
+    return 1 if survivors else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
