@@ -60,7 +60,7 @@ def test_branching_tree_needs_tip(tmp_path):
     rng = np.random.default_rng(0)
     text, links = random_urdf(rng, 3, fixed_prob=0.0, branch=True)
     path = write(tmp_path, text)
-    with pytest.raises(URDFError, match=r"branches at link 'link1'.*pass tip="):
+    with pytest.raises(URDFError, match=r"branches at link 'link1'.*choose the tip link \(--tip"):
         sj.robots.from_urdf(path)
     with pytest.warns(UserWarning, match=r"locked at 0"):
         robot = sj.robots.from_urdf(path, tip="tool")

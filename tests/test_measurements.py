@@ -186,7 +186,7 @@ def test_load_derives_missing_velocities(tmp_path):
                fmt="%.17g")
     inner = slice(200, -200)
     for path in (npz, csv):
-        m = load_measurements(path, n_joints=2)
+        m = load_measurements(path, n_joints=2, trim_edges=False)
         assert m.info["velocities"].startswith("derived")
         assert m.info["cutoff_hz"] == DEFAULT_CUTOFF_HZ
         np.testing.assert_array_equal(m.q, q)
@@ -196,18 +196,44 @@ def test_load_derives_missing_velocities(tmp_path):
         load_measurements(npz, cutoff_hz=120.0)
 
 
+def test_filter_edge_transients_are_trimmed(tmp_path):
+    """Derived accelerations ring at both ends of a recording (the zero-phase filter's
+    edge transients); by default the first and last 2 / cutoff seconds are dropped, which
+    removes the worst errors."""
+    t = np.arange(2000) / RATE
+    w = 2 * np.pi * SINE_HZ  # a cosine: curved at both ends, which the filter cannot know
+    q = AMPLITUDES * np.cos(w * t)[:, None]
+    qdd_true = -AMPLITUDES * w * w * np.cos(w * t)[:, None]
+    path = write_npz(tmp_path / "sine.npz", times=t, positions=q, torques=np.ones_like(q))
+    kept = load_measurements(path)
+    full = load_measurements(path, trim_edges=False)
+    assert kept.info["trimmed_s"] == pytest.approx(2.0 / DEFAULT_CUTOFF_HZ)
+    assert full.info["trimmed_s"] == 0.0
+    inside = (t >= t[0] + 0.2) & (t <= t[-1] - 0.2)
+    np.testing.assert_array_equal(kept.times, t[inside])
+    np.testing.assert_array_equal(kept.qdd, full.qdd[inside])
+    err_full, err_kept = np.abs(full.qdd - qdd_true), np.abs(kept.qdd - qdd_true[inside])
+    assert err_kept.max() < 0.5 * err_full.max()  # the spikes were at the ends
+    with pytest.raises(ValueError, match="too short to drop the filter's 8 s edge"):
+        load_measurements(path, cutoff_hz=0.25)  # 2 x 8 s of a 10 s recording
+    recorded = write_npz(tmp_path / "rec.npz", **small(T=400))
+    assert load_measurements(recorded).n_samples == 400  # nothing derived: nothing trimmed
+
+
 def test_derive_filter_downsample_options(tmp_path):
     path = write_npz(tmp_path / "m.npz", **small(T=400))
     plain = load_measurements(path)
     assert plain.info["cutoff_hz"] is None
-    derived = load_measurements(path, derive=True, cutoff_hz=5.0)
+    derived = load_measurements(path, derive=True, cutoff_hz=5.0, trim_edges=False)
     assert derived.info["accelerations"].startswith("derived")
     assert derived.info["cutoff_hz"] == 5.0 and "5 Hz" in derived.info["filter"]
     assert not np.allclose(derived.qd, plain.qd)
     np.testing.assert_array_equal(derived.tau, plain.tau)
-    smooth = load_measurements(path, filter_torques=True, cutoff_hz=5.0)
+    smooth = load_measurements(path, filter_torques=True, cutoff_hz=5.0, trim_edges=False)
     assert smooth.tau.std() < 0.5 * plain.tau.std()  # white noise, 5 of 50 Hz kept
     np.testing.assert_array_equal(smooth.qd, plain.qd)
+    trimmed = load_measurements(path, derive=True, cutoff_hz=5.0)  # 0.4 s off each end
+    np.testing.assert_array_equal(trimmed.tau, plain.tau[40:360])
     half = load_measurements(path, downsample=3)
     assert half.n_samples == 134 and half.rate == pytest.approx(100.0 / 3)
     np.testing.assert_array_equal(half.tau, plain.tau[::3])
@@ -306,7 +332,7 @@ def test_pickled_object_array_is_refused(tmp_path):
 BAD_NPZ = {
     "nan": (small(torques=np.where(np.eye(60, 2) > 0, np.nan, 0.0)),
             r"field 'torques': expected finite numbers, got 2 NaN/Inf value\(s\), "
-            r"the first at sample 0, joint 1"),
+            r"the first at sample 1 of 60, joint 1"),
     "inf_times": (small(times=np.r_[np.arange(59) / 100.0, np.inf]),
                   r"field 'times': expected finite"),
     "missing_key": (small(torques=None),
@@ -384,7 +410,7 @@ ROWS = [[i / 100.0, 0.1 * i, 0.2, 1.0, 2.0] for i in range(40)]
          r"line 5, column 'q1': expected a number, got 'abc'"),
         (HEADER, ROWS[:3] + [[0.03, "nan", 0, 0, 0]] + ROWS[4:],
          r"field 'positions': expected finite numbers, got 1 NaN/Inf value\(s\), the first "
-         r"at sample 3, joint 1"),
+         r"at sample 4 of 40, joint 1"),
         (HEADER, ROWS[:3] + [[0.03, 0, 0, "inf", 0]] + ROWS[4:], r"field 'torques': expected "
                                                                  r"finite"),
         (HEADER, ROWS[::-1], r"field 'times': expected strictly increasing"),

@@ -104,7 +104,7 @@ def _torques(name: str, value) -> np.ndarray:
     if bad.any():
         t, j = np.argwhere(bad)[0]
         raise ValueError(f"{name}: expected finite numbers, got {int(bad.sum())} NaN/Inf "
-                         f"value(s), the first at sample {t}, joint {j + 1}")
+                         f"value(s), the first at sample {t + 1} of {arr.shape[0]}, joint {j + 1}")
     return arr
 
 

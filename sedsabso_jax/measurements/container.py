@@ -47,7 +47,8 @@ def as_float(source: str, field: str, value, ndim: int) -> np.ndarray:
     bad = ~np.isfinite(arr)
     if bad.any():
         where = np.argwhere(bad)[0]
-        at = f"sample {where[0]}" + (f", joint {where[1] + 1}" if ndim == 2 else "")
+        at = f"sample {where[0] + 1} of {arr.shape[0]}" + (f", joint {where[1] + 1}"
+                                                         if ndim == 2 else "")
         raise ValueError(
             f"{source}: field {field!r}: expected finite numbers, got {int(bad.sum())} "
             f"NaN/Inf value(s), the first at {at}"

@@ -5,14 +5,23 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
+import numpy as np
+
 from . import formats
 from .container import Measurements, check_fields, positive_int
-from .signal import BUTTERWORTH_ORDER, DEFAULT_CUTOFF_HZ, differentiate, lowpass, median_rate
+from .signal import (
+    BUTTERWORTH_ORDER,
+    DEFAULT_CUTOFF_HZ,
+    differentiate,
+    edge_seconds,
+    lowpass,
+    median_rate,
+)
 
 
 def load_measurements(path, *, n_joints: int | None = None, cutoff_hz: float | None = None,
                       filter_torques: bool = False, downsample: int = 1,
-                      derive: bool = False) -> Measurements:
+                      derive: bool = False, trim_edges: bool = True) -> Measurements:
     """Read measurements from a ``.npz`` or ``.csv`` file (formats: :mod:`.formats`).
 
     Args:
@@ -25,9 +34,14 @@ def load_measurements(path, *, n_joints: int | None = None, cutoff_hz: float | N
         downsample: keep every ``downsample``-th sample, after derivation and filtering.
         derive: derive velocities and accelerations from the positions even where the
             file has them (see :func:`differentiate`); missing ones are always derived.
+        trim_edges: when anything was derived or filtered, drop the first and last
+            :func:`edge_seconds` (``2 / cutoff_hz``) of the recording, where the
+            zero-phase filter rings (spikes in the derived accelerations at the ends), so
+            they never enter a fit.
 
     Positions are kept as recorded. ``info`` records, for velocities, accelerations and
-    torques, ``"recorded"`` or how they were obtained, and the cutoff used.
+    torques, ``"recorded"`` or how they were obtained, the cutoff used and the seconds
+    trimmed at each end (``"trimmed_s"``).
     """
     path = Path(path)
     source = str(path)
@@ -68,7 +82,19 @@ def load_measurements(path, *, n_joints: int | None = None, cutoff_hz: float | N
         fields["torques"] = lowpass(fields["torques"], rate, cutoff, source=source)
         info["torques"] = "recorded, low-passed"
         info["cutoff_hz"], info["filter"] = float(cutoff), filt
-    index = slice(None, None, downsample)
+    first, last = 0, len(times)
+    info["trimmed_s"] = 0.0
+    if trim_edges and info["cutoff_hz"] is not None:
+        edge = edge_seconds(cutoff)
+        first = int(np.searchsorted(times, times[0] + edge, side="left"))
+        last = int(np.searchsorted(times, times[-1] - edge, side="right"))
+        if last - first < 2:
+            raise ValueError(
+                f"{source}: the recording ({times[-1] - times[0]:.3g} s) is too short to drop "
+                f"the filter's {edge:.3g} s edge transients at both ends; raise the cutoff "
+                f"(now {float(cutoff):g} Hz) or keep the edges (trim_edges=False)")
+        info["trimmed_s"] = edge
+    index = slice(first, last, downsample)
     return Measurements(times[index], fields["positions"][index], fields["velocities"][index],
                         fields["accelerations"][index], fields["torques"][index],
                         source=source, info=info)

@@ -73,6 +73,13 @@ def lowpass(x, rate: float, cutoff_hz: float = DEFAULT_CUTOFF_HZ, *,
     return scipy.signal.sosfiltfilt(sos, x, axis=0, padtype="odd", padlen=padlen)
 
 
+def edge_seconds(cutoff_hz: float) -> float:
+    """How long the zero-phase low-pass rings at each end of a recording: ``2 /
+    cutoff_hz`` seconds (0.2 s at 10 Hz), where derived accelerations show the filter's
+    edge transients."""
+    return 2.0 / float(cutoff_hz)
+
+
 def differentiate(times, q, cutoff_hz: float | None = DEFAULT_CUTOFF_HZ, *,
                   source: str = "differentiate") -> tuple[np.ndarray, np.ndarray]:
     """Velocities and accelerations ``(qd, qdd)`` from positions ``q (T, n)``.
