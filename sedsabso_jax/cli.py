@@ -18,13 +18,12 @@ import sys
 import time
 import warnings
 
-#: ``identify``'s default estimator and friction model: the combination that validates
-#: best on held-out real data in ``benchmarks/kuka_real.py`` (README, "Real robot").
-DEFAULT_METHOD = "WLS"
-DEFAULT_FRICTION = "viscous-coulomb+offset+quadratic+smooth"
-DEFAULT_METHOD_WHY = "best held-out NRMS on the KUKA LWR4+ data"
-WEIGHTS = ("auto", "residual", "limits", "equal")
-BUILTIN_ROBOTS = ("rs010n", "kuka_lwr4")
+#: ``identify`` chooses its estimator, weighting and friction model by cross-validation
+#: over non-repeating stretches of the identification data unless told otherwise
+#: (``sedsabso_jax/identification/validation.py``; README, "Real robots").
+AUTO = "auto"
+WEIGHTS = (AUTO, "residual", "limits", "equal")
+BUILTIN_ROBOTS = ("rs010n", "kuka_lwr4", "staubli_tx40", "franka_panda")
 
 
 def _cmd_base_parameters(args) -> None:
@@ -96,32 +95,118 @@ def _cmd_reproduce(args) -> None:
     print("written: " + ", ".join(written))
 
 
+def _numbers(flag: str, text, n: int):
+    """A comma-separated list of ``n`` numbers given with ``flag``."""
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise ValueError(f"{flag}: expected {n} comma-separated numbers, got {text!r}") from None
+    if len(values) != n:
+        raise ValueError(f"{flag}: expected {n} numbers (one per joint), got {len(values)}")
+    return values
+
+
+def _transmission(args, n: int):
+    """The motors' transmission from --gear-ratios, --coupling, --position-offsets and
+    --drive-gains, or None."""
+    from .measurements.transmission import Transmission
+
+    ratios = _numbers("--gear-ratios", args.gear_ratios, n)
+    if ratios is None:
+        for flag, value in (("--motor-side", args.motor_side), ("--coupling", args.coupling),
+                            ("--position-offsets", args.position_offsets),
+                            ("--drive-gains", args.drive_gains)):
+            if value:
+                raise ValueError(f"{flag} needs --gear-ratios (one per joint, motor turns per "
+                                 f"joint turn)")
+        return None
+    coupling = {}
+    for spec in args.coupling or []:
+        try:
+            pair, ratio = spec.split("=")
+            motor, joint = (int(v) for v in pair.split(":"))
+            coupling[(motor, joint)] = float(ratio)
+        except ValueError:
+            raise ValueError(f"--coupling: expected MOTOR:JOINT=RATIO (numbered from 1), e.g. "
+                             f"6:5=32, got {spec!r}") from None
+    return Transmission.from_gear_ratios(
+        ratios, coupling=coupling, offset=_numbers("--position-offsets",
+                                                   args.position_offsets, n),
+        drive_gains=_numbers("--drive-gains", args.drive_gains, n))
+
+
+def _candidates(args, limits):
+    """The (method, sigma) pairs and friction models the command chooses among."""
+    from .identification.validation import FRICTION_CANDIDATES, WEIGHTING_CANDIDATES
+
+    sigma = {"equal": None, "residual": "residual", "limits": "limits"}.get(args.weights)
+    if args.weights == "limits" and limits is None:
+        raise ValueError(f"--weights limits: no torque limits known for --robot {args.robot} "
+                         f"(a URDF's <limit effort=...>)")
+    if args.method == AUTO:
+        weightings = [w for w in WEIGHTING_CANDIDATES
+                      if args.weights == AUTO or w[1] == sigma]
+    elif args.weights != AUTO:
+        weightings = [(args.method, sigma)]
+    elif args.method in ("SEDSABSO", "BSO", "LDWPSO"):
+        weightings = [(args.method, None)]  # every swarm run is costly: no weighting search
+    else:
+        weightings = [(args.method, s) for s in (None, "residual", "limits")
+                      if not (args.method == "WLS" and s is None)]
+    frictions = FRICTION_CANDIDATES if args.friction == AUTO else (args.friction,)
+    return frictions, weightings
+
+
 def _cmd_identify(args) -> None:
     from .dynamics import robots
+    from .dynamics.base_parameters import base_parameters
     from .dynamics.limits import joint_limits
     from .identification.identify import identify
     from .identification.report import IdentificationReport
+    from .identification.validation import cross_validate, select_model
     from .measurements.load import load_measurements
 
     _check_writable(args.out, args.json)
     robot = robots.load(args.robot, args.tip)
     load = dict(n_joints=robot.n_joints, cutoff_hz=args.cutoff_hz,
-                filter_torques=args.filter_torques, downsample=args.downsample)
+                filter_torques=args.filter_torques, downsample=args.downsample,
+                resample_hz=args.resample_hz, trim_edges=not args.keep_edges)
+    transmission = _transmission(args, robot.n_joints)
     data = load_measurements(args.data, **load)
     held_out = load_measurements(args.validate, **load) if args.validate else None
+    if args.motor_side:
+        data = transmission.to_joint_side(data)
+        held_out = None if held_out is None else transmission.to_joint_side(held_out)
     limits = joint_limits(args.robot, robot).torque_limits
-    sigma = {"auto": "limits" if limits is not None and args.method == "WLS" else None,
-             "equal": None}.get(args.weights, args.weights)
-    if sigma == "limits" and limits is None:
-        raise ValueError(f"--weights limits: no torque limits known for --robot {args.robot} "
-                         f"(a URDF's <limit effort=...>)")
-    ident = identify(robot, data.q, data.qd, data.qdd, data.tau, method=args.method,
-                     friction=args.friction, physical=args.physical, limits=limits,
-                     sigma=sigma, runs=args.runs, iterations=args.iterations, seed=args.seed)
-    report = IdentificationReport.evaluate(ident, data, held_out, limits)
+    frictions, weightings = _candidates(args, limits)
+    choose = len(frictions) * len(weightings) > 1
+    if args.folds == 0 and choose:
+        raise ValueError("--folds 0 turns cross-validation off, so nothing can be chosen by "
+                         "it: give --method, --weights and --friction")
+    common = dict(limits=limits, physical=args.physical, runs=args.runs,
+                  iterations=args.iterations, seed=args.seed, transmission=transmission,
+                  base=base_parameters(robot))
+    arrays = (data.times, data.q, data.qd, data.qdd, data.tau)
+    selection = cv = None
+    if choose:
+        selection = select_model(robot, *arrays, frictions=frictions,
+                                 weightings=weightings, folds=args.folds, **common)
+        chosen = selection.chosen
+        cv = next(c for s, c in selection.candidates if s is chosen)
+    else:
+        (method, sigma), = weightings
+        chosen = {"method": method, "sigma": sigma, "friction": frictions[0]}
+        if args.folds:
+            cv = cross_validate(robot, *arrays, folds=args.folds, **common, **chosen)
+    ident = identify(robot, data.q, data.qd, data.qdd, data.tau, **common, **chosen)
+    report = IdentificationReport.evaluate(ident, data, held_out, limits,
+                                           cross_validation=cv, selection=selection)
     settings = {"robot": args.robot, "data": os.path.abspath(args.data),
                 "validate": None if args.validate is None else os.path.abspath(args.validate),
-                "torque_limits": limits, "loading": {**load, "data_info": data.info}}
+                "torque_limits": limits, "loading": {**load, "data_info": data.info},
+                "motor_side": bool(args.motor_side)}
     written = report.write(settings, args.out, args.json)
     print(report.text())
     if written:
@@ -211,15 +296,29 @@ def build_parser() -> argparse.ArgumentParser:
     ip.add_argument("--tip", default=None, help="URDF tip link, for trees that branch")
     ip.add_argument("--data", required=True, help="identification data (.npz or .csv)")
     ip.add_argument("--validate", default=None, help="held-out data (.npz or .csv)")
-    ip.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD,
-                    help=f"estimator (default {DEFAULT_METHOD}: {DEFAULT_METHOD_WHY})")
-    ip.add_argument("--friction", default=DEFAULT_FRICTION,
-                    help=f"friction model: terms of {', '.join(FRICTION_TERMS)} joined by + "
-                    f"(default {DEFAULT_FRICTION})")
-    ip.add_argument("--weights", choices=WEIGHTS, default="auto",
+    ip.add_argument("--method", choices=(AUTO, *METHODS), default=AUTO,
+                    help="estimator; auto (default): OLS or WLS, chosen by cross-validation")
+    ip.add_argument("--friction", default=AUTO,
+                    help=f"torque model: terms of {', '.join(FRICTION_TERMS)} joined by +; "
+                    "auto (default): chosen by cross-validation among viscous-coulomb, "
+                    "+offset, +offset+armature, +offset+quadratic+smooth")
+    ip.add_argument("--weights", choices=WEIGHTS, default=AUTO,
                     help="row weights per joint: residual (Gautier's two-step WLS), limits "
-                    "(1 / torque limit), equal; auto = limits for WLS when the robot has "
-                    "torque limits, else the method's default")
+                    "(1 / torque limit), equal; auto (default): chosen by cross-validation")
+    ip.add_argument("--folds", type=_non_negative_int, default=5,
+                    help="cross-validation folds over the motion's phase (5); they choose "
+                    "what is auto and report the error on motion not fitted; 0: off")
+    ip.add_argument("--motor-side", action="store_true",
+                    help="--data and --validate hold motor angles and motor torques (or "
+                    "currents, with --drive-gains): converted with --gear-ratios")
+    ip.add_argument("--gear-ratios", default=None,
+                    help="motor turns per joint turn, one per joint, comma-separated")
+    ip.add_argument("--coupling", action="append", default=None, metavar="M:J=RATIO",
+                    help="motor M also turns with joint J at RATIO (repeatable), e.g. 6:5=32")
+    ip.add_argument("--position-offsets", default=None,
+                    help="joint position of each encoder zero [rad], comma-separated")
+    ip.add_argument("--drive-gains", default=None,
+                    help="motor torque per unit of recorded current, one per motor")
     ip.add_argument("--physical", action="store_true",
                     help="physically consistent parameters (OLS/WLS): positive-definite "
                     "pseudo-inertia per link, friction >= 0")
@@ -234,6 +333,11 @@ def build_parser() -> argparse.ArgumentParser:
     ip.add_argument("--filter-torques", action="store_true", help="low-pass the torques")
     ip.add_argument("--downsample", type=_positive_int, default=1,
                     help="keep every k-th sample after filtering (1)")
+    ip.add_argument("--resample-hz", type=_positive_float, default=None,
+                    help="interpolate onto a uniform grid at this rate first (irregular logs)")
+    ip.add_argument("--keep-edges", action="store_true",
+                    help="keep the first and last 2 / cutoff seconds, where derived signals "
+                    "show the filter's edge transients (dropped by default)")
     ip.add_argument("--json", default=None,
                     help="write the results JSON to this path (its directory is created)")
     ip.add_argument("--out", default=None,

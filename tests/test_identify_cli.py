@@ -56,9 +56,10 @@ def test_rs010n_noise_free_recovers_the_true_parameters(rs010n_files, tmp_path, 
 
 def test_kuka_real_data_end_to_end(tmp_path, capsys):
     """A slice of the real KUKA LWR4+ runs: the default method identifies on run 1 and
-    validates on run 2; the JSON has the documented keys and the held-out NRMS over the
-    torque limits is the default's, pinned to +-5 % (measured 0.12144 % on these slices;
-    plain OLS with Coulomb + viscous friction gives about 0.2 %, outside the band)."""
+    validates on run 2; the JSON has the documented keys, the model chosen by
+    cross-validation on run 1's slice is OLS with a torque offset, and the held-out NRMS
+    over the torque limits is pinned to +-5 % (measured 0.14102 % on these slices; plain
+    OLS with Coulomb + viscous friction gives 0.217 %, outside the band)."""
     m1 = sj.load_kuka_lwr4(1).slice(0, 2500)
     m2 = sj.load_kuka_lwr4(2).slice(0, 1500)
     p1, p2 = m1.save(tmp_path / "m1.npz"), m2.save(tmp_path / "m2.npz")
@@ -66,13 +67,18 @@ def test_kuka_real_data_end_to_end(tmp_path, capsys):
                      "--validate", str(p2), "--json", str(tmp_path / "r.json")])
     assert code == 0
     doc = json.loads((tmp_path / "r.json").read_text())
-    assert set(doc) == {"base_parameters", "fit", "validation", "settings"}
+    assert set(doc) == {"base_parameters", "fit", "validation", "settings",
+                        "cross_validation"}
     assert len(doc["base_parameters"]["names"]) == len(doc["base_parameters"]["values"])
     val = doc["validation"]
     assert len(val["nrms_range_percent"]) == len(val["relative_rms_percent"]) == 7
-    assert val["nrms_limits_percent"] == pytest.approx(0.12144, rel=0.05)
+    assert val["nrms_limits_percent"] == pytest.approx(0.14102, rel=0.05)
     assert doc["settings"]["torque_limits"] == [176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0]
-    assert doc["settings"]["method"] == cli.DEFAULT_METHOD
+    assert (doc["settings"]["method"], doc["settings"]["friction"]) == (
+        "OLS", "viscous-coulomb+offset")
+    cv = doc["cross_validation"]
+    assert cv["selection"]["chosen"]["friction"] == "viscous-coulomb+offset"
+    assert len(cv["selection"]["candidates"]) == 12 and 0.2 < cv["score"] < 0.4
 
 
 def _write_bad(tmp_path, case: str, good: str) -> str:

@@ -13,7 +13,7 @@ from jaxtyping import Array, Float
 
 from ..paper import TABLE3_DEG
 from .robot import Robot
-from .robots import kuka_lwr4_urdf
+from .robots import kuka_lwr4_urdf, staubli_tx40_urdf
 from .urdf import joint_limit_rows
 
 
@@ -117,11 +117,26 @@ def joint_limits_from_urdf(path, robot: Robot, *, qdd_max=None) -> JointLimits:
                        angular=[t == "revolute" for t in robot.joint_types])
 
 
+#: The Franka Emika Panda's joint limits from Franka's robot and interface specifications
+#: (rad, rad/s, rad/s^2, N m).
+FRANKA_PANDA_LIMITS = {
+    "q_min": (-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973),
+    "q_max": (2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973),
+    "qd_max": (2.1750, 2.1750, 2.1750, 2.1750, 2.6100, 2.6100, 2.6100),
+    "qdd_max": (15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0),
+    "tau_max": (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0),
+}
+
+
 def joint_limits(spec: str, robot: Robot) -> JointLimits:
     """The limits of a robot named as on the command line (see
     :func:`sedsabso_jax.robots.load`): ``"rs010n"`` the paper's Table 3 (no efforts),
-    ``"kuka_lwr4"`` its vendored URDF, a ``.urdf`` path that file."""
+    ``"franka_panda"`` :data:`FRANKA_PANDA_LIMITS`, ``"kuka_lwr4"`` and
+    ``"staubli_tx40"`` their vendored URDFs, a ``.urdf`` path that file."""
     if spec == "rs010n":
         return JointLimits.rs010n()
-    with kuka_lwr4_urdf() if spec == "kuka_lwr4" else contextlib.nullcontext(spec) as path:
+    if spec == "franka_panda":
+        return JointLimits(**FRANKA_PANDA_LIMITS, names=robot.joint_names)
+    urdf = {"kuka_lwr4": kuka_lwr4_urdf, "staubli_tx40": staubli_tx40_urdf}.get(spec)
+    with urdf() if urdf else contextlib.nullcontext(spec) as path:
         return joint_limits_from_urdf(path, robot)

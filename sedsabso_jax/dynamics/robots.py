@@ -14,8 +14,8 @@ from . import spatial as sp
 from .robot import N_LINK_PARAMETERS, STANDARD_GRAVITY, Robot
 from .urdf import from_urdf
 
-__all__ = ["BUILTIN", "from_dh", "from_mdh", "from_urdf", "kuka_lwr4", "kuka_lwr4_urdf", "load",
-           "rs010n"]
+__all__ = ["BUILTIN", "franka_panda", "from_dh", "from_mdh", "from_urdf", "kuka_lwr4",
+           "kuka_lwr4_urdf", "load", "rs010n", "staubli_tx40", "staubli_tx40_urdf"]
 
 
 def _dh_columns(**columns):
@@ -124,6 +124,40 @@ def kuka_lwr4_urdf():
     return resources.as_file(path)
 
 
+def staubli_tx40_urdf():
+    """Context manager giving a file path of the vendored Staubli TX40 URDF (FIGAROH,
+    Apache-2.0; modified-DH link frames and a-priori inertials)."""
+    path = (resources.files("sedsabso_jax") / "data" / "staubli_tx40"
+            / "tx40_mdh_modified.urdf")
+    return resources.as_file(path)
+
+
+def staubli_tx40() -> Robot:
+    """The Staubli TX40 (6 revolute joints, coupled wrist) from its URDF, with its
+    a-priori inertials. Its encoders and torques are motor side: see
+    :class:`~sedsabso_jax.measurements.transmission.Transmission`."""
+    with staubli_tx40_urdf() as p:
+        return from_urdf(p)
+
+
+#: The Franka Emika Panda's kinematics, modified DH (Craig): per joint ``alpha_{i-1}``
+#: [rad], ``a_{i-1}`` [m], ``d_i`` [m] (Franka's published table, as used by Gaz et al.,
+#: IEEE RA-L 4(4), 2019); the flange (``d = 0.107`` m) carries no moving joint.
+FRANKA_PANDA_MDH = {
+    "alpha": (0.0, -np.pi / 2, np.pi / 2, np.pi / 2, -np.pi / 2, np.pi / 2, np.pi / 2),
+    "a": (0.0, 0.0, 0.0, 0.0825, -0.0825, 0.0, 0.088),
+    "d": (0.333, 0.0, 0.316, 0.0, 0.384, 0.0, 0.0),
+}
+
+
+def franka_panda() -> Robot:
+    """The Franka Emika Panda's 7 joints (modified DH, :data:`FRANKA_PANDA_MDH`). Franka
+    publishes no inertial parameters: ``params`` are zero (no prior)."""
+    t = FRANKA_PANDA_MDH
+    return from_mdh(t["alpha"], t["a"], t["d"], name="franka_panda",
+                    joint_names=tuple(f"panda_joint{i}" for i in range(1, 8)))
+
+
 def kuka_lwr4() -> Robot:
     """The KUKA LWR4+ from its URDF (FloBaRoID, LGPL-3.0), with its a-priori inertials."""
     with kuka_lwr4_urdf() as p:
@@ -131,7 +165,8 @@ def kuka_lwr4() -> Robot:
 
 
 #: The robots :func:`load` knows by name.
-BUILTIN = {"rs010n": rs010n, "kuka_lwr4": kuka_lwr4}
+BUILTIN = {"rs010n": rs010n, "kuka_lwr4": kuka_lwr4, "staubli_tx40": staubli_tx40,
+           "franka_panda": franka_panda}
 
 
 def load(spec: str, tip: str | None = None) -> Robot:

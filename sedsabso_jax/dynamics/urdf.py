@@ -133,8 +133,8 @@ def from_urdf(path, tip: str | None = None, *, gravity=STANDARD_GRAVITY) -> Robo
                 leaves = sorted(_leaves(children, link))
                 raise URDFError(
                     f"URDF {path!r} branches at link {link!r} into joints "
-                    f"{[j.name for j in onward]}; choose the tip link (--tip on the command line, tip= in "
-                    f"Python), one of {leaves}"
+                    f"{[j.name for j in onward]}; choose the tip link (--tip on the command "
+                    f"line, tip= in Python), one of {leaves}"
                 )
             path_joints.append(onward[0])
             link = onward[0].child

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+import warnings
 from typing import Any
 
 import jax
@@ -93,7 +94,7 @@ class Identification:
                 f"friction={self.model.friction!r}, fit RMS per joint [{rms}])")
 
 
-def _check_data(robot: Robot, q, qd, qdd, tau):
+def check_data(robot: Robot, q, qd, qdd, tau):
     """``q, qd, qdd, tau`` as float arrays ``(samples, n)`` of one length, finite."""
     n = robot.n_joints
     arrays = []
@@ -124,54 +125,56 @@ def _per_joint(name, value, n, allow_none=True):
     return v
 
 
-def identify(robot: Robot, q, qd, qdd, tau, *, method: str = "OLS",
-             friction: str = "viscous-coulomb", sigma=None, limits=None,
-             physical: bool = False, prior=None, prior_weight: float = 0.0,
-             box=(0.5, 0.5), runs: int = 1, iterations: int = 600, seed: int = 0,
-             solver=None, smooth_velocity: float = SMOOTH_VELOCITY,
-             base: BaseParameters | None = None, weights=_UNSET) -> Identification:
-    """Identify the base parameters (plus extra friction terms) of ``robot`` from
-    ``q, qd, qdd, tau`` (each ``(samples, n)``).
+@dataclasses.dataclass(frozen=True, eq=False)
+class Setup:
+    """A checked identification problem: the torque model and how to fit it. Built by
+    :func:`prepare` from :func:`identify`'s arguments; :func:`fit_regressor` fits it to
+    any rows of data (all of them, or the training folds of a cross-validation)."""
 
-    Args:
-        method: one of :data:`METHODS` (see the module docstring).
-        friction: ``"viscous-coulomb"`` plus optional ``"+offset"``, ``"+quadratic"``,
-            ``"+smooth"`` (any order).
-        sigma: per-joint standard deviations; each joint's rows are divided by its sigma
-            (the weights are ``1 / sigma``): ``None`` (equal; for ``"WLS"`` it means
-            ``"residual"``), ``"residual"`` (Gautier's two-step WLS: the RMS of each
-            joint's OLS residual, corrected for the parameters on that joint), ``"limits"``
-            (the torque ``limits``, which makes the L2 objective the squared
-            NRMS-over-limits error), or ``n`` positive numbers.
-        limits: per-joint torque limits (N m): the fit reports its NRMS over them; needed
-            by ``sigma="limits"``.
-        physical: fit physically consistent full parameters (OLS / WLS only).
-        prior: full a-priori parameters (12 per link); default ``robot.params``. Centre of
-            the swarms' box (projected on the base; extras centred on 0) and target of
-            ``prior_weight``.
-        prior_weight: weight of ``||p - prior||^2`` in a physical fit.
-        box: the swarms' box: ``(fraction, floor)`` gives centre ``+- max(fraction
-            |centre|, floor)`` (:func:`~sedsabso_jax.optim.box_around`); or explicit
-            ``(lower, upper)`` arrays of length ``dim``.
-        runs, iterations, seed, solver: swarm runs (the best is kept), iterations, PRNG
-            seed, and a solver instance (default: the method's ``.paper()`` settings).
-        smooth_velocity: the "smooth" Coulomb term's ``tanh(qd / smooth_velocity)``.
-        base: a precomputed ``base_parameters(robot)`` (computed when ``None``).
-        weights: deprecated name of ``sigma``.
+    model: TorqueModel
+    method: str
+    kind: str  # how sigma is chosen: "equal", "residual", "limits" or "given"
+    given: np.ndarray | None
+    limits: np.ndarray | None
+    physical: bool
+    prior: np.ndarray
+    prior_weight: float
+    box: Any
+    runs: int
+    iterations: int
+    seed: int
+    solver: Any
 
-    Warns (``UserWarning``) with the condition number and the names of the columns
-    concerned when the stacked regressor is rank deficient or poorly conditioned.
-    """
-    if weights is not _UNSET:
-        _deprecation.warn("identify(weights=...)", "sigma=...")
-        sigma = weights
+    def settings(self) -> dict:
+        """The settings that do not depend on the data."""
+        out = {"method": self.method, "friction": self.model.friction,
+               "physical": self.physical, "weights": self.kind, "limits": self.limits}
+        if self.model.transmission is not None:
+            out["transmission"] = self.model.transmission
+        if self.model.regrouped:
+            out["regrouped"] = list(self.model.regrouped)
+        if "smooth" in self.model.friction:
+            out["smooth_velocity"] = float(self.model.smooth_velocity)
+        if self.physical:
+            out.update(prior_weight=self.prior_weight, psd_margin=PSD_MARGIN)
+        return out
+
+
+def prepare(robot: Robot, *, method: str = "OLS", friction: str = "viscous-coulomb",
+            sigma=None, limits=None, physical: bool = False, prior=None,
+            prior_weight: float = 0.0, box=(0.5, 0.5), runs: int = 1, iterations: int = 600,
+            seed: int = 0, solver=None, smooth_velocity: float = SMOOTH_VELOCITY,
+            base: BaseParameters | None = None, transmission=None, warn: bool = True
+            ) -> Setup:
+    """Check :func:`identify`'s settings (its docstring says what they mean) and build the
+    torque model; nothing is fitted. ``warn``: say which extra columns the base regressor
+    already spans."""
     if not isinstance(robot, Robot):
         raise TypeError(f"robot must be a sedsabso_jax.Robot, got {type(robot).__name__}")
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     friction = canonical_friction(friction)
     n = robot.n_joints
-    q, qd, qdd, tau = _check_data(robot, q, qd, qdd, tau)
     limits = _per_joint("limits", limits, n)
     if physical and method not in ("OLS", "WLS"):
         raise ValueError(f"physical=True is a least-squares fit: use method 'OLS' or 'WLS', "
@@ -192,9 +195,13 @@ def identify(robot: Robot, q, qd, qdd, tau, *, method: str = "OLS",
         base = base_parameters(robot)
     elif not isinstance(base, BaseParameters) or base.robot.n_params != robot.n_params:
         raise ValueError("base must be base_parameters(robot) of this robot")
-    model = TorqueModel(base, friction, float(smooth_velocity))
-
-    # row weights 1 / sigma
+    K = getattr(transmission, "matrix", transmission)
+    model = TorqueModel(base, friction, float(smooth_velocity), K)
+    if warn and model.regrouped:
+        warnings.warn(f"identify: {', '.join(model.regrouped)} cannot be identified apart from "
+                      f"the base parameters (their columns are in the base regressor's span); "
+                      f"left out of the model", stacklevel=3)
+    given = None
     if isinstance(sigma, str):
         if sigma not in ("residual", "limits"):
             raise ValueError(f"sigma must be None, 'residual', 'limits' or {n} positive "
@@ -207,29 +214,53 @@ def identify(robot: Robot, q, qd, qdd, tau, *, method: str = "OLS",
         given = _per_joint("sigma", sigma, n, allow_none=False)
     if kind == "limits" and limits is None:
         raise ValueError("sigma='limits' needs limits=(one torque limit per joint)")
-
     if method in SWARMS:
         solver = _check_swarm_settings(method, solver, box, model.dim)
+    return Setup(model=model, method=method, kind=kind, given=given, limits=limits,
+                 physical=bool(physical), prior=prior, prior_weight=float(prior_weight),
+                 box=box, runs=int(runs), iterations=int(iterations), seed=int(seed),
+                 solver=solver)
 
-    t0 = time.perf_counter()
-    Y = model.regressor(q, qd, qdd)  # (T, n, d)
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class RegressorFit:
+    """What :func:`fit_regressor` returns: the model's values (and full parameters of a
+    physical fit), the sigma used, the factorisation of the unweighted rows, the weighted
+    rows ``W x ~ b``, the solver's :class:`~sedsabso_jax.Result` (swarms, LM) and extra
+    settings."""
+
+    x: np.ndarray
+    full: np.ndarray | None
+    sigma: np.ndarray
+    factor0: Any
+    W: np.ndarray
+    b: np.ndarray
+    result: Any
+    extra: dict
+
+
+def fit_regressor(setup: Setup, Y, tau, *, warn: bool = True) -> RegressorFit:
+    """Fit ``setup`` to the model's regressor ``Y (T, n, d)`` and the torques ``tau (T, n)``
+    (rows of one data set, or of the training folds of a cross-validation)."""
+    n = setup.model.robot.n_joints
     T, d = Y.shape[0], Y.shape[-1]
     W0, tau0 = Y.reshape(-1, d), tau.reshape(-1)
-    names = model.names
     factor0 = factorize(W0, tau0)
-    factor0.warn("identify: the stacked regressor", names)
-
+    if warn:
+        factor0.warn("identify: the stacked regressor", setup.model.names, stacklevel=3)
+    kind = setup.kind
     if kind == "equal":
         sigma = np.ones(n)
     elif kind == "limits":
-        sigma = limits
+        sigma = setup.limits
     elif kind == "given":
-        sigma = given
+        sigma = setup.given
     else:  # Gautier: sigma_j^2 = ||r_j||^2 / (T - d_j), d_j = parameters acting on joint j
         r = Y @ factor0.solve() - tau
         d_j = np.count_nonzero(np.any(Y != 0, axis=0), axis=-1)
         sigma = np.sqrt(np.sum(r ** 2, axis=0) / np.maximum(T - d_j, 1))
         sigma = np.where(sigma > 0, sigma, max(sigma.max(), 1e-12))
+    method = setup.method
     if kind == "equal":
         W, b, factor = W0, tau0, factor0
     else:
@@ -238,8 +269,8 @@ def identify(robot: Robot, q, qd, qdd, tau, *, method: str = "OLS",
         factor = factorize(W, b) if method in ("OLS", "WLS") else None
 
     result, full, extra = None, None, {}
-    if physical:
-        fit_p = fit_physical(model, factor, prior, float(prior_weight))
+    if setup.physical:
+        fit_p = fit_physical(setup.model, factor, setup.prior, setup.prior_weight)
         x, full = fit_p.values, fit_p.full_params
         extra["physical_fit"] = {"solver": fit_p.solver, "status": fit_p.status,
                                  "iterations": fit_p.iterations, "seconds": fit_p.seconds}
@@ -255,28 +286,80 @@ def identify(robot: Robot, q, qd, qdd, tau, *, method: str = "OLS",
         extra.update(steps=int(result.n_evaluations), compile_s=float(result.compile_s),
                      run_s=float(result.run_s))
     else:
-        x, result, extra = _swarm(method, model, W, b, prior, box, runs, iterations, seed,
-                                  solver)
+        x, result, extra = _swarm(method, setup.model, W, b, setup.prior, setup.box,
+                                  setup.runs, setup.iterations, setup.seed, setup.solver)
+    return RegressorFit(x=np.asarray(x, dtype=float), full=full, sigma=np.asarray(sigma),
+                        factor0=factor0, W=W, b=b, result=result, extra=extra)
+
+
+def identify(robot: Robot, q, qd, qdd, tau, *, method: str = "OLS",
+             friction: str = "viscous-coulomb", sigma=None, limits=None,
+             physical: bool = False, prior=None, prior_weight: float = 0.0,
+             box=(0.5, 0.5), runs: int = 1, iterations: int = 600, seed: int = 0,
+             solver=None, smooth_velocity: float = SMOOTH_VELOCITY,
+             base: BaseParameters | None = None, transmission=None,
+             weights=_UNSET) -> Identification:
+    """Identify the base parameters (plus extra friction terms) of ``robot`` from
+    ``q, qd, qdd, tau`` (each ``(samples, n)``).
+
+    Args:
+        method: one of :data:`METHODS` (see the module docstring).
+        friction: ``"viscous-coulomb"`` plus optional ``"+offset"``, ``"+quadratic"``,
+            ``"+smooth"``, ``"+armature"``, ``"+coupling"`` (any order; :mod:`.model`).
+        sigma: per-joint standard deviations; each joint's rows are divided by its sigma
+            (the weights are ``1 / sigma``): ``None`` (equal; for ``"WLS"`` it means
+            ``"residual"``), ``"residual"`` (Gautier's two-step WLS: the RMS of each
+            joint's OLS residual, corrected for the parameters on that joint), ``"limits"``
+            (the torque ``limits``, which makes the L2 objective the squared
+            NRMS-over-limits error), or ``n`` positive numbers.
+        limits: per-joint torque limits (N m): the fit reports its NRMS over them; needed
+            by ``sigma="limits"``.
+        physical: fit physically consistent full parameters (OLS / WLS only).
+        prior: full a-priori parameters (12 per link); default ``robot.params``. Centre of
+            the swarms' box (projected on the base; extras centred on 0) and target of
+            ``prior_weight``.
+        prior_weight: weight of ``||p - prior||^2`` in a physical fit.
+        box: the swarms' box: ``(fraction, floor)`` gives centre ``+- max(fraction
+            |centre|, floor)`` (:func:`~sedsabso_jax.optim.box_around`); or explicit
+            ``(lower, upper)`` arrays of length ``dim``.
+        runs, iterations, seed, solver: swarm runs (the best is kept), iterations, PRNG
+            seed, and a solver instance (default: the method's ``.paper()`` settings).
+        smooth_velocity: the "smooth" Coulomb term's ``tanh(qd / smooth_velocity)``.
+        base: a precomputed ``base_parameters(robot)`` (computed when ``None``).
+        transmission: the motors' transmission (a
+            :class:`~sedsabso_jax.measurements.transmission.Transmission` or its matrix
+            ``K``, motor angles ``K q``) for the ``armature`` and ``coupling`` terms; the
+            data ``q, qd, qdd, tau`` are joint side whatever it is.
+        weights: deprecated name of ``sigma``.
+
+    Warns (``UserWarning``) with the condition number and the names of the columns
+    concerned when the stacked regressor is rank deficient or poorly conditioned.
+    """
+    if weights is not _UNSET:
+        _deprecation.warn("identify(weights=...)", "sigma=...")
+        sigma = weights
+    setup = prepare(robot, method=method, friction=friction, sigma=sigma, limits=limits,
+                    physical=physical, prior=prior, prior_weight=prior_weight, box=box,
+                    runs=runs, iterations=iterations, seed=seed, solver=solver,
+                    smooth_velocity=smooth_velocity, base=base, transmission=transmission)
+    q, qd, qdd, tau = check_data(robot, q, qd, qdd, tau)
+    t0 = time.perf_counter()
+    Y = setup.model.regressor(q, qd, qdd)  # (T, n, d)
+    out = fit_regressor(setup, Y, tau)
     run_s = time.perf_counter() - t0
 
-    r = Y @ x - tau
-    rms = np.sqrt(np.mean(r ** 2, axis=0))
-    rw = (W @ x - b)
+    x = out.x
+    rms = np.sqrt(np.mean((Y @ x - tau) ** 2, axis=0))
+    rw = out.W @ x - out.b
     fit = {"rms": rms, "l1": float(np.abs(rw).sum()), "l2": float(rw @ rw),
-           "condition_number": factor0.condition_number, "rank": factor0.rank,
-           "samples": int(T), "seconds": float(run_s)}
-    if limits is not None:
-        fit["nrms_limits_percent"] = float(np.mean(nrms_over_limits(rms, limits)))
-    settings = {"method": method, "friction": friction, "physical": bool(physical),
-                "weights": kind, "sigma": sigma, "limits": limits}
-    if "smooth" in friction:
-        settings["smooth_velocity"] = float(smooth_velocity)
-    if physical:
-        settings.update(prior_weight=float(prior_weight), psd_margin=PSD_MARGIN)
-    settings.update(extra)
-    return Identification(names=names, values=np.asarray(x, dtype=float), model=model,
-                          method=method, settings=jsonable(settings), fit=jsonable(fit),
-                          full_params=full, result=result)
+           "condition_number": out.factor0.condition_number, "rank": out.factor0.rank,
+           "samples": int(Y.shape[0]), "seconds": float(run_s)}
+    if setup.limits is not None:
+        fit["nrms_limits_percent"] = float(np.mean(nrms_over_limits(rms, setup.limits)))
+    settings = {**setup.settings(), "sigma": out.sigma, **out.extra}
+    return Identification(names=setup.model.names, values=x, model=setup.model,
+                          method=setup.method, settings=jsonable(settings),
+                          fit=jsonable(fit), full_params=out.full, result=out.result)
 
 
 def _swarm(method, model, W, b, prior, box, runs, iterations, seed, solver):

@@ -10,7 +10,7 @@ satisfying the triangle inequalities and a centre of mass inside the body all fo
 
 The fit (:func:`fit_physical`) minimises, over every link's ``J`` (eigenvalues >=
 :data:`PSD_MARGIN`), the friction coefficients (``Fc, Fv >= 0``, ``FQ >= 0``) and the
-torque offsets (free)::
+torque offsets (free), armature and motor friction (``>= 0``)::
 
     ||W x - b||^2 + lambda ||p - p_prior||^2,     x = [K p, extras]
 
@@ -94,9 +94,9 @@ def fit_physical(model: TorqueModel, factor: Factorization, prior, prior_weight:
     residual = cp.hstack([M @ pe - factor.c, np.sqrt(lam) * (p - prior)])
     objective = cp.norm(residual / scale, 2)
     constraints = [Ji - PSD_MARGIN * np.eye(4) >> 0 for Ji in J] + [friction >= 0]
-    if "FQ" in model.extras:
-        k = model.extras.index("FQ")
-        constraints.append(extras[k * n: (k + 1) * n] >= 0)
+    nonneg = np.flatnonzero(model.nonnegative[model.base.rank:])
+    if nonneg.size:  # friction and armature extras
+        constraints.append(extras[nonneg] >= 0)
     problem = cp.Problem(cp.Minimize(objective), constraints)
     t0 = time.perf_counter()
     try:

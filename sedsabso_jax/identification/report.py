@@ -11,6 +11,7 @@ import numpy as np
 from .._output import jsonable, markdown_table, pyplot, save_figure, write_json
 from .identify import Identification
 from .metrics import Metrics, validation_metrics
+from .validation import CrossValidation, Selection
 
 
 def figure_torques(times, tau_measured, tau_predicted, joint_names, title: str):
@@ -40,7 +41,9 @@ class IdentificationReport:
 
     ``data`` and ``held_out`` are :class:`~sedsabso_jax.Measurements`; ``fit`` and
     ``validation`` their :class:`~.metrics.Metrics` (``validation`` None without held-out
-    data); ``predicted`` the predicted torques of each.
+    data); ``predicted`` the predicted torques of each; ``cross_validation`` the chosen
+    setting's :class:`~.validation.CrossValidation` on ``data`` and ``selection`` the
+    :class:`~.validation.Selection` it came from (each None when not run).
     """
 
     ident: Identification
@@ -50,10 +53,12 @@ class IdentificationReport:
     fit: Metrics
     validation: Metrics | None
     predicted: tuple[np.ndarray, np.ndarray | None]
+    cross_validation: CrossValidation | None = None
+    selection: Selection | None = None
 
     @classmethod
-    def evaluate(cls, ident: Identification, data, held_out=None,
-                 limits=None) -> IdentificationReport:
+    def evaluate(cls, ident: Identification, data, held_out=None, limits=None, *,
+                 cross_validation=None, selection=None) -> IdentificationReport:
         """Predict the torques of ``data`` (and ``held_out``) and compare."""
         fit_pred = ident.predict(data.q, data.qd, data.qdd)
         val_pred = None if held_out is None else ident.predict(held_out.q, held_out.qd,
@@ -62,7 +67,7 @@ class IdentificationReport:
                    validation_metrics(data.tau, fit_pred, limits),
                    None if held_out is None else validation_metrics(held_out.tau, val_pred,
                                                                     limits),
-                   (fit_pred, val_pred))
+                   (fit_pred, val_pred), cross_validation, selection)
 
     def text(self) -> str:
         """The parameters and per-joint metrics as text (markdown tables)."""
@@ -73,6 +78,22 @@ class IdentificationReport:
                  f"(friction {ident.model.friction}) from {self.data.n_samples} samples of "
                  f"{self.data.source}", "", markdown_table(["#", "parameter", "value"], rows),
                  "", "fit (identification data):", self.fit.table(robot.joint_names)]
+        if self.cross_validation is not None:
+            cv = self.cross_validation
+            folds = (f"{len(cv.fold_scores)} folds of the motion's phase, period "
+                     f"{cv.period_s:.4g} s" if cv.period_s is not None
+                     else f"{len(cv.fold_scores)} contiguous folds (the motion does not repeat)")
+            lines += ["", f"cross-validated on the identification data ({folds}; each fold "
+                          f"predicted by a fit to the others):", cv.metrics.table(
+                              robot.joint_names),
+                      f"CV error ({cv.measure}): {cv.score:.4f} +- {cv.standard_error:.4f} "
+                      f"(mean and standard error over the folds)"]
+        if self.selection is not None:
+            lines += ["", "chosen by cross-validation (the simplest whose fold-by-fold excess "
+                          "over the lowest is within one standard error):",
+                      markdown_table(["method", "sigma", "friction", "parameters",
+                                      f"CV {self.cross_validation.measure}", ""],
+                                     self.selection.table())]
         if self.validation is not None:
             lines += ["", f"validation ({self.held_out.source}, {self.held_out.n_samples} "
                           f"samples):", self.validation.table(robot.joint_names)]
@@ -88,6 +109,9 @@ class IdentificationReport:
             "base_parameters": {"names": ident.names, "values": ident.values},
             "fit": {**self.fit.as_dict(), "residual": ident.fit},
             "validation": None if self.validation is None else self.validation.as_dict(),
+            "cross_validation": None if self.cross_validation is None else {
+                **self.cross_validation.as_dict(),
+                "selection": None if self.selection is None else self.selection.as_dict()},
             "settings": {**settings, **ident.settings},
         })
 

@@ -21,7 +21,8 @@ from .signal import (
 
 def load_measurements(path, *, n_joints: int | None = None, cutoff_hz: float | None = None,
                       filter_torques: bool = False, downsample: int = 1,
-                      derive: bool = False, trim_edges: bool = True) -> Measurements:
+                      derive: bool = False, trim_edges: bool = True,
+                      resample_hz: float | None = None) -> Measurements:
     """Read measurements from a ``.npz`` or ``.csv`` file (formats: :mod:`.formats`).
 
     Args:
@@ -34,6 +35,9 @@ def load_measurements(path, *, n_joints: int | None = None, cutoff_hz: float | N
         downsample: keep every ``downsample``-th sample, after derivation and filtering.
         derive: derive velocities and accelerations from the positions even where the
             file has them (see :func:`differentiate`); missing ones are always derived.
+        resample_hz: interpolate every recorded signal linearly onto a uniform grid at
+            this rate first (before any derivation or filtering): for logs whose time
+            stamps are far from uniform.
         trim_edges: when anything was derived or filtered, drop the first and last
             :func:`edge_seconds` (``2 / cutoff_hz``) of the recording, where the
             zero-phase filter rings (spikes in the derived accelerations at the ends), so
@@ -62,10 +66,13 @@ def load_measurements(path, *, n_joints: int | None = None, cutoff_hz: float | N
     else:
         raw, info = formats.read_csv(path, source, n_joints)
     fields = check_fields(source, raw, n_joints)
+    if resample_hz is not None:
+        fields = _resample(fields, resample_hz, source)
     times = fields["times"]
     rate = median_rate(times)
     cutoff = DEFAULT_CUTOFF_HZ if cutoff_hz is None else cutoff_hz
     info.update({"format": suffix[1:], "rate_hz": rate, "cutoff_hz": None,
+                 "resampled_hz": None if resample_hz is None else float(resample_hz),
                  "filter": None, "velocities": "recorded", "accelerations": "recorded",
                  "torques": "recorded", "downsample": downsample})
     filt = (f"Butterworth low-pass, order {BUTTERWORTH_ORDER}, zero phase (sosfiltfilt), "
@@ -98,6 +105,26 @@ def load_measurements(path, *, n_joints: int | None = None, cutoff_hz: float | N
     return Measurements(times[index], fields["positions"][index], fields["velocities"][index],
                         fields["accelerations"][index], fields["torques"][index],
                         source=source, info=info)
+
+
+def _resample(fields: dict, rate_hz, source: str) -> dict:
+    """Every recorded field linearly interpolated onto ``t0 + k / rate_hz``."""
+    try:
+        rate = float(rate_hz)
+    except (TypeError, ValueError):
+        rate = float("nan")
+    if not (np.isfinite(rate) and rate > 0):
+        raise ValueError(f"{source}: resample_hz must be a positive number, got {rate_hz!r}")
+    times = fields["times"]
+    grid = times[0] + np.arange(int(np.floor((times[-1] - times[0]) * rate)) + 1) / rate
+    if grid.size < 2:
+        raise ValueError(f"{source}: resample_hz={rate:g} leaves fewer than 2 samples")
+    out = {"times": grid}
+    for key, value in fields.items():
+        if key != "times":
+            out[key] = None if value is None else np.column_stack(
+                [np.interp(grid, times, value[:, j]) for j in range(value.shape[1])])
+    return out
 
 
 def load_kuka_lwr4(run: int = 1, **kwargs) -> Measurements:
