@@ -168,7 +168,10 @@ def _cmd_identify(args) -> None:
     from .identification.validation import cross_validate, select_model
     from .measurements.load import load_measurements
 
-    _check_writable(args.out, args.json)
+    _check_writable(args.out, args.json, args.urdf_out)
+    if args.urdf_out is not None and not args.physical:
+        raise ValueError("--urdf-out needs --physical: a simulator's URDF needs physically "
+                         "consistent link parameters")
     robot = robots.load(args.robot, args.tip)
     load = dict(n_joints=robot.n_joints, cutoff_hz=args.cutoff_hz,
                 filter_torques=args.filter_torques, downsample=args.downsample,
@@ -207,15 +210,15 @@ def _cmd_identify(args) -> None:
                 "validate": None if args.validate is None else os.path.abspath(args.validate),
                 "torque_limits": limits, "loading": {**load, "data_info": data.info},
                 "motor_side": bool(args.motor_side)}
-    written = report.write(settings, args.out, args.json)
+    written = report.write(settings, args.out, args.json, args.urdf_out)
     print(report.text())
     if written:
         print("written: " + ", ".join(written))
 
 
-def _check_writable(out_dir, json_path) -> None:
+def _check_writable(out_dir, json_path, urdf_path=None) -> None:
     """Fail before the (long) run, not after it, when an output cannot be written."""
-    for flag, path in (("--out", out_dir), ("--json", json_path)):
+    for flag, path in (("--out", out_dir), ("--json", json_path), ("--urdf-out", urdf_path)):
         if path is None:
             continue
         existing = os.path.abspath(path if flag == "--out" else os.path.dirname(
@@ -226,8 +229,9 @@ def _check_writable(out_dir, json_path) -> None:
             raise ValueError(f"{flag} {path!r}: {existing!r} exists and is not a directory")
         if not os.access(existing, os.W_OK):
             raise ValueError(f"{flag} {path!r}: directory {existing!r} is not writable")
-    if json_path is not None and os.path.isdir(json_path):
-        raise ValueError(f"--json {json_path!r} is a directory; expected a file path")
+    for flag, path in (("--json", json_path), ("--urdf-out", urdf_path)):
+        if path is not None and os.path.isdir(path):
+            raise ValueError(f"{flag} {path!r} is a directory; expected a file path")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -342,6 +346,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="write the results JSON to this path (its directory is created)")
     ip.add_argument("--out", default=None,
                     help="directory for torque plots and identification.json (created)")
+    ip.add_argument("--urdf-out", default=None,
+                    help="write the robot's URDF with the identified link parameters and "
+                    "joint friction (needs --physical)")
     ip.set_defaults(func=_cmd_identify)
     parser.set_defaults(func=_cmd_base_parameters, robot="rs010n", tip=None)
     return parser

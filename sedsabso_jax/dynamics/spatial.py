@@ -30,6 +30,18 @@ def rpy_matrix(rpy) -> np.ndarray:
     return rot_z(y) @ rot_y(p) @ rot_x(r)
 
 
+def rpy_from_matrix(R) -> np.ndarray:
+    """The URDF roll-pitch-yaw of a rotation matrix (inverse of :func:`rpy_matrix`); at
+    pitch +-pi/2 (gimbal lock) the roll is set to 0."""
+    R = np.asarray(R, dtype=float)
+    pitch = np.arcsin(np.clip(-R[2, 0], -1.0, 1.0))
+    if abs(R[2, 0]) < 1.0 - 1e-12:
+        roll, yaw = np.arctan2(R[2, 1], R[2, 2]), np.arctan2(R[1, 0], R[0, 0])
+    else:
+        roll, yaw = 0.0, np.arctan2(-R[0, 1], R[1, 1])
+    return np.array([roll, pitch, yaw])
+
+
 def transform(rotation=None, translation=None) -> np.ndarray:
     T = np.eye(4)
     if rotation is not None:

@@ -31,8 +31,10 @@ import numpy as np
 
 from .. import _deprecation
 from .._output import jsonable
+from .._version import __version__
 from ..dynamics.base_parameters import BaseParameters, base_parameters
 from ..dynamics.robot import Robot
+from ..dynamics.urdf_writer import to_urdf
 from ..optim.baselines import least_squares
 from ..optim.box import box_around, check_bounds
 from ..optim.driver import minimise
@@ -79,6 +81,21 @@ class Identification:
     def predict(self, q, qd, qdd) -> np.ndarray:
         """Predicted torques ``(..., n)`` for states ``(..., n)``."""
         return self.model.predict(self.values, q, qd, qdd)
+
+    def urdf(self) -> str:
+        """The robot's URDF with the identified link parameters and joint friction (a
+        physical fit only: a simulator needs real bodies). Extra terms a URDF cannot
+        hold (offsets, quadratic friction, armature, ...) are listed in a comment."""
+        if self.full_params is None:
+            raise ValueError("a URDF needs the full link parameters of a physically "
+                             "consistent fit: identify with physical=True (--physical)")
+        base = self.model.base.rank
+        extras = ", ".join(f"{n} = {v:.6g}" for n, v in zip(self.names[base:],
+                                                           self.values[base:]))
+        comment = (f"link parameters identified by sedsabso-jax {__version__} "
+                   f"({self.method}, physically consistent, friction {self.model.friction})"
+                   + (f"; terms URDF cannot hold: {extras}" if extras else ""))
+        return to_urdf(self.model.robot, self.full_params, comment=comment)
 
     def as_dict(self) -> dict:
         """Names, values, method, settings and fit statistics, JSON-ready."""

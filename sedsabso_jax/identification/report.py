@@ -8,7 +8,7 @@ import os
 
 import numpy as np
 
-from .._output import jsonable, markdown_table, pyplot, save_figure, write_json
+from .._output import jsonable, markdown_table, pyplot, save_figure, write_json, write_text
 from .identify import Identification
 from .metrics import Metrics, validation_metrics
 from .validation import CrossValidation, Selection
@@ -126,11 +126,14 @@ class IdentificationReport:
                                      f"{robot.name}, {ident.method}: {label}")
                 for name, d, pred, label in sets}
 
-    def write(self, settings: dict, out_dir=None, json_path=None) -> list[str]:
+    def write(self, settings: dict, out_dir=None, json_path=None, urdf_path=None
+              ) -> list[str]:
         """Write the figures and ``identification.json`` into ``out_dir`` (created if
-        missing) and the JSON also to ``json_path`` (its directory created); everything
-        is rendered before the first file is written. Returns the paths written."""
+        missing), the JSON also to ``json_path`` and the identified robot's URDF to
+        ``urdf_path`` (their directories created); everything is rendered before the first
+        file is written. Returns the paths written."""
         document = self.document(settings)
+        urdf = self.ident.urdf() if urdf_path is not None else None
         figures = self.figures() if out_dir is not None else {}
         written = []
         if out_dir is not None:
@@ -141,8 +144,11 @@ class IdentificationReport:
             write_json(os.path.join(out_dir, "identification.json"), document)
             written.append(os.path.join(out_dir, "identification.json"))
         if json_path is not None:
-            parent = os.path.dirname(os.path.abspath(json_path))
-            os.makedirs(parent, exist_ok=True)
+            os.makedirs(os.path.dirname(os.path.abspath(json_path)), exist_ok=True)
             write_json(json_path, document)
             written.append(os.fspath(json_path))
+        if urdf_path is not None:
+            os.makedirs(os.path.dirname(os.path.abspath(urdf_path)), exist_ok=True)
+            write_text(urdf_path, urdf)
+            written.append(os.fspath(urdf_path))
         return written
