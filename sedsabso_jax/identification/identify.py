@@ -242,9 +242,9 @@ def prepare(robot: Robot, *, method: str = "OLS", friction: str = "viscous-coulo
 @dataclasses.dataclass(frozen=True, eq=False)
 class RegressorFit:
     """What :func:`fit_regressor` returns: the model's values (and full parameters of a
-    physical fit), the sigma used, the factorisation of the unweighted rows, the weighted
-    rows ``W x ~ b``, the solver's :class:`~sedsabso_jax.Result` (swarms, LM) and extra
-    settings."""
+    physical fit), the sigma used, the factorisation of the unweighted rows (None when
+    neither the diagnostics nor the fit needed it), the weighted rows ``W x ~ b``, the
+    solver's :class:`~sedsabso_jax.Result` (swarms, LM) and extra settings."""
 
     x: np.ndarray
     full: np.ndarray | None
@@ -262,10 +262,11 @@ def fit_regressor(setup: Setup, Y, tau, *, warn: bool = True) -> RegressorFit:
     n = setup.model.robot.n_joints
     T, d = Y.shape[0], Y.shape[-1]
     W0, tau0 = Y.reshape(-1, d), tau.reshape(-1)
-    factor0 = factorize(W0, tau0)
+    kind = setup.kind
+    # the unweighted factor: the diagnostics, the OLS fit and Gautier's first pass
+    factor0 = factorize(W0, tau0) if warn or kind in ("equal", "residual") else None
     if warn:
         factor0.warn("identify: the stacked regressor", setup.model.names, stacklevel=3)
-    kind = setup.kind
     if kind == "equal":
         sigma = np.ones(n)
     elif kind == "limits":

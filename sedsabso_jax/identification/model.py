@@ -32,6 +32,7 @@ import numpy as np
 from .. import _deprecation
 from ..dynamics.base_parameters import RANK_TOLERANCE, BaseParameters, random_states
 from ..dynamics.robot import N_LINK_PARAMETERS, Robot
+from ..measurements.transmission import coupled_motors
 
 FRICTION_TERMS = ("viscous-coulomb", "offset", "quadratic", "smooth", "armature", "coupling")
 #: Velocity scale (rad/s or m/s) of the "smooth" Coulomb term tanh(qd / v).
@@ -81,7 +82,7 @@ class TorqueModel:
 
     @property
     def _coupled(self) -> tuple[int, ...]:
-        return tuple(int(m) for m in np.flatnonzero(np.count_nonzero(self._K, axis=1) > 1))
+        return coupled_motors(self._K)
 
     @property
     def extras(self) -> tuple[str, ...]:

@@ -30,6 +30,8 @@ import dataclasses
 
 import numpy as np
 
+from ..dynamics.base_parameters import base_parameters
+from ..measurements.transmission import coupled_motors
 from .identify import check_data, fit_regressor, prepare
 from .metrics import Metrics, validation_metrics
 
@@ -222,8 +224,10 @@ def select_model(robot, times, q, qd, qdd, tau, *, frictions=None, weightings=No
     if not frictions or not weightings:
         raise ValueError("select_model needs at least one friction model and one weighting")
     K = getattr(settings.get("transmission"), "matrix", settings.get("transmission"))
-    coupled = K is not None and np.any(np.count_nonzero(np.asarray(K), axis=1) > 1)
+    coupled = K is not None and bool(coupled_motors(K))
     (q, qd, qdd, tau), labels, period = _folds_of(robot, times, q, qd, qdd, tau, folds)
+    if settings.get("base") is None:  # computed once for every candidate
+        settings = {**settings, "base": base_parameters(robot)}
     tried = []
     for friction in frictions:
         if coupled and "coupling" not in friction:

@@ -27,6 +27,12 @@ import numpy as np
 from .container import Measurements
 
 
+def coupled_motors(K) -> tuple[int, ...]:
+    """The motors (0-based rows of the transmission matrix ``K``) that turn with more than
+    one joint."""
+    return tuple(int(m) for m in np.flatnonzero(np.count_nonzero(np.asarray(K), axis=1) > 1))
+
+
 def _square(name: str, value, n: int | None = None) -> np.ndarray:
     arr = np.asarray(value, dtype=float)
     if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or (n is not None and arr.shape[0] != n):
@@ -99,7 +105,7 @@ class Transmission:
     @property
     def coupled_motors(self) -> tuple[int, ...]:
         """Motors (0-based) that turn with more than one joint."""
-        return tuple(int(m) for m in np.flatnonzero(np.count_nonzero(self.matrix, axis=1) > 1))
+        return coupled_motors(self.matrix)
 
     def to_joint_side(self, data: Measurements) -> Measurements:
         """Joint-side measurements from motor-side ones: positions, velocities and
