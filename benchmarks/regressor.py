@@ -8,7 +8,9 @@ alternation, so load on this shared machine hits both alike; the ratio uses medi
 Before timing, the two regressors are checked to agree.
 
 A floor: the result is ``samples x n x 12 n`` float64 (47 MB for the KUKA at 10,000
-samples); the time to fill a fresh array of that size with numpy is printed beside.
+samples); the time to fill a fresh array of that size with numpy is printed beside. The
+regressor runs where JAX runs (chunks of 16 / 8 samples on a CPU, all at once on a GPU,
+see ``sedsabso_jax.dynamics.regressor.chunk_size``); the JSON names the device.
 
     python benchmarks/regressor.py [--samples 10000] [--repeats 15] [--json out.json]
 
@@ -22,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import platform
 import time
 import warnings
 from importlib import resources
@@ -30,6 +31,7 @@ from importlib import resources
 import jax
 import numpy as np
 import pinocchio as pin
+from device import describe, device_info
 
 import sedsabso_jax as sj
 
@@ -114,10 +116,9 @@ def main():
         kuka = sj.robots.from_urdf(str(path))
     rows.append(bench("KUKA LWR4+", kuka, pin.buildModelFromUrdf(str(path)), args.samples,
                       args.repeats, rng))
-    device = jax.devices()[0]
-    print(f"device: {device.platform} ({platform.processor() or platform.machine()}), "
-          f"jax {jax.__version__}, pinocchio {pin.__version__}, float64, median of "
-          f"{args.repeats}")
+    info = device_info()
+    print(f"device: {describe(info)}, jax {jax.__version__}, pinocchio {pin.__version__}, "
+          f"float64, median of {args.repeats}")
     print(f"{'robot':11s} {'samples':>7s} {'compile_s':>9s} {'jax_ms':>7s} {'pin_ms':>7s} "
           f"{'speedup':>7s} {'fill_ms':>7s} {'out_MB':>6s}")
     for r in rows:
@@ -126,7 +127,7 @@ def main():
               f"{r['fill_fresh_array_ms_median']:7.1f} {r['output_MB']:6.1f}")
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump({"device": str(device), "jax": jax.__version__,
+            json.dump({"device": info, "jax": jax.__version__,
                        "pinocchio": pin.__version__, "rows": rows}, fh, indent=2)
 
 

@@ -10,9 +10,20 @@ final fitness and mean largest absolute base-parameter error over the 10 runs; S
 BSO time from alternating pairs. Also: BSO with the authors' literal sign, all three with
 Vmax = 0.1 (ub - lb) and SEDSABSO with 0.05, OLS / LM / GN / L1-LP, and pyswarms'
 GlobalBestPSO (50 particles, w = 0.8, c1 = c2 = 2, numpy fitness over the swarm), mealpy's
-OriginalPSO and evosax's PSO (``peers.py``; same fitness, same budget).
+OriginalPSO and evosax's PSO (``peers.py``; same fitness, same budget; float32 computed
+in float32 throughout).
 
-    python benchmarks/swarms.py [--json out.json] [--quick]
+Speed against evosax's PSO: the three swarms and evosax's PSO, float64 and float32,
+compiled first, then one run each in turn for ``--ratio-seeds`` seeds in the same
+process; time per run the fastest over the seeds (the shared machine only ever adds
+time), ratio to evosax's in the same dtype. Runs per call: ``--runs-per-call`` runs in
+one compiled call (``minimise(runs=k)``, ``batch="auto"``: in sequence on a CPU, vmapped
+on an accelerator; evosax's run vmapped over keys), one call timed after compilation.
+The JSON names the device (platform, kind, CPU model).
+
+    python benchmarks/swarms.py [--json out.json] [--quick] [--runs-per-call 1,10,100,1000]
+
+About 20 minutes on the 2-core CPU, most of it the 1000-run calls.
 """
 
 from __future__ import annotations
@@ -25,9 +36,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import peers
+from device import describe, device_info
 
 import sedsabso_jax as sj
 from sedsabso_jax import baselines
+from sedsabso_jax.optim import driver
 
 
 def problem(samples=1000, seed=0, box=0.1):
@@ -76,6 +89,71 @@ def paired_ratio(prob, lo, hi, iterations, dtype, pairs=9):
             "max": float(ratios.max())}
 
 
+def speed_vs_evosax(prob, lo, hi, iterations, dtypes, seeds):
+    """Time per run of SEDSABSO, BSO, LDWPSO and evosax's PSO, interleaved seeds in one
+    process; fastest and median over the seeds, ratio (fastest) to evosax's PSO in the
+    same dtype."""
+    W, tau = np.asarray(prob.W), np.asarray(prob.tau)
+    calls = {}
+    for dtype in dtypes:
+        name = jnp.dtype(dtype).name
+        exe, _ = peers.evosax_compiled(W, tau, lo, hi, iterations, dtype=name)
+        jax.block_until_ready(exe(jax.random.key(0)))
+
+        def evosax_call(seed, exe=exe):
+            t0 = time.perf_counter()
+            jax.block_until_ready(exe(jax.random.key(seed)))
+            return time.perf_counter() - t0
+
+        calls["evosax PSO", name] = evosax_call
+        for method in ("SEDSABSO", "BSO", "LDWPSO"):
+            solver = getattr(sj, method).paper()
+            sj.minimise(prob, solver, lo, hi, key=jax.random.key(0), iterations=iterations,
+                        dtype=dtype)  # compile
+            calls[method, name] = (lambda seed, s=solver, d=dtype: sj.minimise(
+                prob, s, lo, hi, key=jax.random.key(seed), iterations=iterations,
+                dtype=d).run_s)
+    times = {k: [] for k in calls}
+    for seed in range(1, seeds + 1):
+        for k, call in calls.items():
+            times[k].append(call(seed))
+    rows = []
+    for (method, name), t in times.items():
+        ref = min(times["evosax PSO", name])
+        rows.append({"method": method, "dtype": name, "seeds": seeds,
+                     "time_per_run_s": float(min(t)), "time_per_run_median_s": float(np.median(t)),
+                     "over_evosax": float(min(t) / ref)})
+    return rows
+
+
+def runs_per_call(prob, lo, hi, iterations, dtypes, counts):
+    """Seconds of one compiled call of ``k`` runs, for each ``k`` in ``counts`` (timed
+    after the compiling call), per method and dtype; evosax's PSO vmapped over keys."""
+    W, tau = np.asarray(prob.W), np.asarray(prob.tau)
+    rows = []
+    for dtype in dtypes:
+        name = jnp.dtype(dtype).name
+        for k in counts:
+            for method in ("SEDSABSO", "BSO", "LDWPSO"):
+                solver = getattr(sj, method).paper()
+                first = sj.minimise(prob, solver, lo, hi, key=jax.random.key(0),
+                                    iterations=iterations, dtype=dtype, runs=k)
+                r = sj.minimise(prob, solver, lo, hi, key=jax.random.key(1),
+                                iterations=iterations, dtype=dtype, runs=k)
+                batch = driver._batching("auto", k, jax.device_count() > 1,
+                                         driver.run_bytes(solver, prob, len(lo), dtype,
+                                                          iterations))
+                rows.append({"method": method, "dtype": name, "runs": k,
+                             "batch": batch, "compile_s": first.compile_s,
+                             "call_s": r.run_s, "per_run_s": r.run_s / k})
+                print(f"  {method:8s} {name} {k:5d} runs: {r.run_s:8.2f} s", flush=True)
+            compile_s, call_s = peers.evosax_many(W, tau, lo, hi, iterations, k, name)
+            rows.append({"method": "evosax PSO", "dtype": name, "runs": k, "batch": "vmap",
+                         "compile_s": compile_s, "call_s": call_s, "per_run_s": call_s / k})
+            print(f"  evosax   {name} {k:5d} runs: {call_s:8.2f} s", flush=True)
+    return rows
+
+
 def pyswarms_row(prob, lo, hi, true, iterations):
     import pyswarms as ps
 
@@ -113,8 +191,13 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--json", default=None)
     parser.add_argument("--quick", action="store_true", help="100 iterations, float64 only")
+    parser.add_argument("--ratio-seeds", type=int, default=7)
+    parser.add_argument("--runs-per-call", default="1,10,100,1000",
+                        help="comma-separated run counts per compiled call ('' to skip)")
     args = parser.parse_args()
     iterations = 100 if args.quick else 600
+    info = device_info()
+    print(f"device: {describe(info)}, jax {info['jax']}", flush=True)
     prob, lo, hi, true = problem()
     rows = []
     dtypes = (jnp.float64,) if args.quick else (jnp.float64, jnp.float32)
@@ -131,6 +214,7 @@ def main():
                              ("LDWPSO Vmax 0.1", sj.LDWPSO(vmax_fraction=0.1))):
             rows.append(swarm_row(name, solver, prob, lo, hi, true, iterations, jnp.float64))
     ratios = [paired_ratio(prob, lo, hi, iterations, dtype) for dtype in dtypes]
+    speed = speed_vs_evosax(prob, lo, hi, iterations, dtypes, args.ratio_seeds)
     rows += baseline_rows(prob, true)
     W, tau = np.asarray(prob.W), np.asarray(prob.tau)
     peers_rows = (("pyswarms", lambda: pyswarms_row(prob, lo, hi, true, iterations)),
@@ -144,8 +228,10 @@ def main():
         except ImportError:
             print(f"{label} not installed: pip install -e '.[bench]' (mealpy: see peers.py)")
     floor = next(r["fitness_mean"] for r in rows if r["method"] == "L1-LP")
+    counts = [int(k) for k in args.runs_per_call.split(",") if k.strip()]
+    many = runs_per_call(prob, lo, hi, iterations, dtypes, counts) if counts else []
     print(f"RS010N, 1000 samples, 21 base parameters, {iterations} iterations, "
-          f"device {jax.devices()[0].platform}; L1 floor f = {floor:.3g}")
+          f"device {describe(info)}; L1 floor f = {floor:.3g}")
     print(f"{'method':24s} {'dtype':7s} {'compile_s':>9s} {'run_s':>7s} {'10 runs_s':>9s} "
           f"{'f mean':>9s} {'max|err|':>8s}")
     for r in rows:
@@ -159,18 +245,29 @@ def main():
               f"(min {r['min']:.2f}, max {r['max']:.2f})")
     if ("SEDSABSO", "float64") in by:
         peer_rows = [r for r in rows if r["method"].split()[0] in ("pyswarms", "mealpy",
-                                                                   "evosax")]
+                                                                   "evosax")
+                     and r["dtype"] == "float64"]
         if peer_rows:
             fastest = min(peer_rows, key=lambda r: r["time_per_run_s"])
             ratio = fastest["time_per_run_s"] / by["SEDSABSO", "float64"]["time_per_run_s"]
             print(f"fastest peer: {fastest['method']} ({fastest['dtype']}), "
                   f"{fastest['time_per_run_s']:.3f} s/run; SEDSABSO float64 is {ratio:.2f}x "
                   f"its speed")
+    print(f"time per run against evosax's PSO, same process, fastest of {args.ratio_seeds} "
+          f"interleaved seeds:")
+    for r in speed:
+        print(f"  {r['method']:10s} {r['dtype']:7s} {r['time_per_run_s']:7.3f} s "
+              f"(median {r['time_per_run_median_s']:.3f})  {r['over_evosax']:.2f}x evosax")
+    if many:
+        print("runs per call (batch='auto'; evosax vmapped): seconds per call / per run")
+        for r in many:
+            print(f"  {r['method']:10s} {r['dtype']:7s} {r['runs']:5d} runs "
+                  f"[{r['batch']}]: {r['call_s']:8.2f} s / {r['per_run_s']:.4f} s")
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump({"device": str(jax.devices()[0]), "iterations": iterations,
-                       "l1_floor": floor, "rows": rows, "sedsabso_over_bso": ratios}, fh,
-                      indent=2)
+            json.dump({"device": info, "iterations": iterations, "l1_floor": floor,
+                       "rows": rows, "sedsabso_over_bso": ratios, "speed_vs_evosax": speed,
+                       "runs_per_call": many}, fh, indent=2)
 
 
 if __name__ == "__main__":

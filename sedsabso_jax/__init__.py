@@ -45,8 +45,10 @@ from .optim import BSO as BSO  # noqa: E402
 from .optim import LDWPSO as LDWPSO  # noqa: E402
 from .optim import SEDSABSO as SEDSABSO  # noqa: E402
 from .optim import BlackBox as BlackBox  # noqa: E402
+from .optim import Evosax as Evosax  # noqa: E402
 from .optim import L1Residual as L1Residual  # noqa: E402
 from .optim import Result as Result  # noqa: E402
 from .optim import baselines as baselines  # noqa: E402
 from .optim import box_around as box_around  # noqa: E402
+from .optim import iterations_for_budget as iterations_for_budget  # noqa: E402
 from .optim import minimise as minimise  # noqa: E402

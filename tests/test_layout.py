@@ -20,8 +20,9 @@ LAYERS = {
     "measurements": 2, "excitation": 2,
     "identification": 3,
     "reproduce": 4,
-    "cli": 5, "__main__": 6,
-    "": 7,  # the package root: re-exports the public names
+    "compare": 5,
+    "cli": 6, "__main__": 7,
+    "": 8,  # the package root: re-exports the public names
 }
 
 

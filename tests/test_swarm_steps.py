@@ -21,6 +21,11 @@ D, SLOTS, M = 3, 5, 8
 TEMPERATURE = 0.5  # of the same order as the candidates' fitness differences
 
 
+#: The beetles' antennae sit at x +- A V: A = d / 2, d = delta / c (Eq. 13) with the paper's
+#: delta = 0.05, c = 2.
+A = 0.05 / 2 / 2
+
+
 def problem(seed=0, upper=2.0):
     """A tiny Eq. 17 problem f(x) = sum |W x - tau|, its box, and a start state with one
     slot inactive, positions near the box's walls and velocities that exceed a small Vmax."""
@@ -36,20 +41,31 @@ def problem(seed=0, upper=2.0):
     return fitness, W, tau, lo, hi, s
 
 
-def _with(s, fitness, **changes):
-    """The state with numpy replacements; embeddings, personal bests and the guide follow."""
+def _with(s, fitness, antenna=A, **changes):
+    """The state with numpy replacements; fitness, antenna differences f(x + a v) -
+    f(x - a v) (a = ``antenna``), personal bests and the guide follow."""
     x = np.asarray(changes.get("x", s.x))
     v = np.asarray(changes.get("v", s.v))
-    f = np.asarray(fitness.value(fitness.embed(jnp.asarray(x))))
+    value = lambda X: np.asarray(fitness.value(fitness.embed(jnp.asarray(X))))  # noqa: E731
+    f = value(x)
     active = np.asarray(changes.get("active", s.active))
     g = int(np.argmin(np.where(active, f, np.inf)))
     return SwarmState(
-        x=jnp.asarray(x), v=jnp.asarray(v), ex=fitness.embed(jnp.asarray(x)),
-        ev=fitness.embed(jnp.asarray(v)), pbest_x=jnp.asarray(x), pbest_f=jnp.asarray(f),
-        active=jnp.asarray(active), guide_x=jnp.asarray(x[g]), guide_f=jnp.asarray(f[g]),
-        best_x=jnp.asarray(x[g]), best_f=jnp.asarray(f[g]),
+        x=jnp.asarray(x), v=jnp.asarray(v),
+        antennae=jnp.asarray(value(x + antenna * v) - value(x - antenna * v)),
+        antennae_bad=jnp.zeros(len(x), jnp.int32), pbest_x=jnp.asarray(x),
+        pbest_f=jnp.asarray(f), active=jnp.asarray(active),
+        slot_nonfinite=jnp.zeros(len(x), jnp.int32), guide_x=jnp.asarray(x[g]),
+        guide_f=jnp.asarray(f[g]), best_x=jnp.asarray(x[g]), best_f=jnp.asarray(f[g]),
         temperature=jnp.asarray(changes.get("temperature", s.temperature)),
         sa_accepted=jnp.int32(0), n_evaluations=jnp.int32(SLOTS), n_nonfinite=jnp.int32(0))
+
+
+def step(solver, fitness, s, t, lo, hi, randomness, iterations=10):
+    """One iteration from an iteration's randomness (what ``solver.randomness`` gives:
+    keys, or for SEDSABSO ``(keys, r, u)``), drawn for the state's population."""
+    draws = solver.draw(randomness, s.x.shape, s.x.dtype)
+    return solver.step(fitness, s, t, iterations, jnp.asarray(lo), jnp.asarray(hi), draws)
 
 
 def as_numpy(s) -> dict:
@@ -135,15 +151,19 @@ def test_bso_step(literal_sign):
     r2 = np.asarray(jax.random.uniform(keys[1], (SLOTS, D), jnp.float64))
     expected, (gx, gf) = bso_ref(as_numpy(s), W, tau, lo, hi, r1, r2, solver)
     expected["guide_x"], expected["guide_f"] = gx, gf  # BSO's guide: the swarm's best
-    after = solver.step(fitness, s, 0, 10, jnp.asarray(lo), jnp.asarray(hi), keys)
+    after = step(solver, fitness, s, 0, lo, hi, keys)
     assert_state(after, expected)
     # the clamp and the box both acted, and the inactive slot's personal best is frozen
     vmax = solver.vmax_fraction * (hi - lo)
     assert np.any(np.isclose(np.abs(expected["v"]), vmax))
     assert np.any(np.isclose(expected["x"], hi)) or np.any(np.isclose(expected["x"], lo))
     np.testing.assert_array_equal(np.asarray(after.pbest_f)[2], np.asarray(s.pbest_f)[2])
-    np.testing.assert_allclose(np.asarray(after.ex), np.asarray(after.x) @ W.T, atol=1e-12)
-    np.testing.assert_allclose(np.asarray(after.ev), np.asarray(after.v) @ W.T, atol=1e-12)
+    # the new positions' antennae, carried to the next iteration: Eq. 12-13 at x', v'
+    x, v = np.asarray(after.x), np.asarray(after.v)
+    np.testing.assert_allclose(np.asarray(after.antennae),
+                               f_ref(x + A * v, W, tau) - f_ref(x - A * v, W, tau),
+                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(np.asarray(after.antennae_bad), 0)
 
 
 def test_bso_moves_toward_the_better_antenna():
@@ -166,14 +186,21 @@ def test_antennae_sit_at_half_the_distance_delta_over_c():
     d / 2 = 0.0125 says the right antenna is better (d = delta c would say the left)."""
     fitness = sj.BlackBox(lambda x, args: jnp.cos(100.0 * x[0]))
     lo, hi = jnp.full(1, -1.0), jnp.full(1, 1.0)
-    s = initial_state(fitness, lo, hi, jax.random.key(0), 1, jnp.ones(1))
-    s = _with(s, fitness, x=np.full((1, 1), 0.01), v=np.ones((1, 1)), active=np.array([True]))
-    solver = sj.BSO(n_beetles=1, w=0.0, lam=0.0)  # the antenna step alone
+    solver = sj.BSO(n_beetles=1, w=1.0, lam=0.0)  # the antenna step alone; V stays 1
+    s = solver.init(fitness, lo, hi, jax.random.key(0))
+    # the antennae as the solver places them (solver.antenna), at x = 0.01, V = 1
+    s = _with(s, fitness, antenna=solver.antenna, x=np.full((1, 1), 0.01), v=np.ones((1, 1)),
+              active=np.array([True]))
     after, _ = solver.beetle_step(fitness, s, lo, hi, jnp.zeros((1, 1)), jnp.zeros((1, 1)))
     d = solver.delta / solver.c
     side = np.sign(np.cos(100 * (0.01 + d / 2)) - np.cos(100 * (0.01 - d / 2)))
     assert side == -1.0  # the antenna at x + V d/2 is the better one
     assert float(after.x[0, 0]) == pytest.approx(0.01 + solver.delta)
+    # and the new position's antennae, computed in the step, sit at d / 2 too
+    x, v = float(after.x[0, 0]), float(after.v[0, 0])
+    assert v == 1.0
+    assert float(after.antennae[0]) == pytest.approx(
+        np.cos(100 * (x + d / 2 * v)) - np.cos(100 * (x - d / 2 * v)), abs=1e-12)
 
 
 # --------------------------------------------------------------------------- LDWPSO
@@ -190,7 +217,7 @@ def test_ldwpso_step_and_inertia_schedule(t, w):
     x = np.clip(ref["x"] + v, lo, hi)
     expected, (gx, gf) = bests_ref(dict(ref, v=v), x, f_ref(x, W, tau))
     expected["guide_x"], expected["guide_f"] = gx, gf
-    after = solver.step(fitness, s, t, 10, jnp.asarray(lo), jnp.asarray(hi), keys)
+    after = step(solver, fitness, s, t, lo, hi, keys)
     assert_state(after, expected)
 
 
@@ -222,8 +249,7 @@ def test_sedsabso_step_two_iterations():
     for it, seed in enumerate((11, 12)):
         k12, r1, r2, r, u = draws(seed)
         ref, accepted, fc = sedsabso_ref(ref, W, tau, lo, hi, r1, r2, r, u, solver)
-        s = solver.step(fitness, s, it, 10, jnp.asarray(lo), jnp.asarray(hi),
-                        (k12, jnp.asarray(r), jnp.asarray(u)))
+        s = step(solver, fitness, s, it, lo, hi, (k12, jnp.asarray(r), jnp.asarray(u)))
         assert_state(s, ref, keys=("x", "v", "pbest_f", "guide_x", "guide_f", "best_x",
                                    "best_f", "n_evaluations", "sa_accepted", "temperature"))
         patterns.append((accepted, fc, ref["guide_f"], ref["best_f"]))
@@ -246,8 +272,7 @@ def test_metropolis_compares_with_the_current_guide():
     _, (_, gf) = bso_ref(as_numpy(s), W, tau, lo, hi, r1, r2, solver)
     later = [k for k in accepted if k > 0]
     assert accepted[0] == 0 and later and all(gf < fc[k] < fc[0] for k in later)
-    out = solver.step(fitness, s, 0, 10, jnp.asarray(lo), jnp.asarray(hi),
-                      (k12, jnp.asarray(r), jnp.asarray(u)))
+    out = step(solver, fitness, s, 0, lo, hi, (k12, jnp.asarray(r), jnp.asarray(u)))
     assert int(out.sa_accepted) == len(accepted)
     np.testing.assert_allclose(np.asarray(out.guide_x), ref["guide_x"], rtol=1e-12)
 
@@ -268,8 +293,7 @@ def test_sedsabso_candidates_are_eq_14():
         for k in range(4):
             u = np.full(4, 2.0)
             u[k] = 0.5
-            out = solver.step(fitness, s, 0, 10, jnp.asarray(lo), jnp.asarray(hi),
-                              (k12, jnp.asarray(r), jnp.asarray(u)))
+            out = step(solver, fitness, s, 0, lo, hi, (k12, jnp.asarray(r), jnp.asarray(u)))
             assert int(out.sa_accepted) == 1
             np.testing.assert_allclose(np.asarray(out.guide_x), cand[k], rtol=1e-12)
 
@@ -281,8 +305,7 @@ def test_guide_and_best_are_kept_apart():
     s = _with(s, fitness, temperature=1e12)
     solver = sj.SEDSABSO(n_start=SLOTS, vmax_fraction=0.2, temperature=1e12, n_trials=4)
     k12, r1, r2, r, _ = draws(5)
-    out = solver.step(fitness, s, 0, 10, jnp.asarray(lo), jnp.asarray(hi),
-                      (k12, jnp.asarray(r), jnp.zeros(4) + 0.5))
+    out = step(solver, fitness, s, 0, lo, hi, (k12, jnp.asarray(r), jnp.zeros(4) + 0.5))
     cand_f = f_ref(np.asarray(out.guide_x)[None], W, tau)[0]
     assert int(out.sa_accepted) == 4
     assert float(out.guide_f) == pytest.approx(cand_f)
@@ -292,11 +315,10 @@ def test_guide_and_best_are_kept_apart():
 
 def test_temperature_cools_geometrically():
     fitness, W, tau, lo, hi, s, solver = sedsabso_case()
-    step = jax.jit(lambda s, k12, r, u: solver.step(fitness, s, 0, 10, jnp.asarray(lo),
-                                                     jnp.asarray(hi), (k12, r, u)))
+    one = jax.jit(lambda s, k12, r, u: step(solver, fitness, s, 0, lo, hi, (k12, r, u)))
     for k in range(1, 8):
         k12, _, _, r, u = draws(k)
-        s = step(s, k12, jnp.asarray(r), jnp.asarray(u))
+        s = one(s, k12, jnp.asarray(r), jnp.asarray(u))
         assert float(s.temperature) == pytest.approx(TEMPERATURE * 0.93 ** k, rel=1e-12)
 
 

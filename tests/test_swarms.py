@@ -250,7 +250,9 @@ def test_runs_shard_over_devices():
         np.testing.assert_allclose(a.x, b.x, rtol=1e-12, atol=1e-14)
         print("devices used:", len(a.f.sharding.device_set))
     """)
-    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4")
+    # host devices: the CPU platform, also on a machine with a GPU
+    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4",
+               JAX_PLATFORMS="cpu")
     run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                          timeout=300)
     assert run.returncode == 0, run.stderr[-2000:]

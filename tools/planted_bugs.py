@@ -29,6 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 FAST = ["tests/test_swarm_steps.py", "tests/test_linear.py"]
 SWARMS = [*FAST, "tests/test_swarms.py"]
 BASELINES = [*FAST, "tests/test_baselines.py", "tests/test_identification.py"]
+KERNELS = [*FAST, "tests/test_backends.py", "tests/test_swarms.py"]
 
 #: (module, text, replacement, what the bug is, tests to run, reason if equivalent)
 BUGS = [
@@ -80,15 +81,25 @@ BUGS = [
      "a shrinking phase keeps the first slots, not the best", SWARMS, None),
     ("optim/fitness.py", "return jnp.where(jnp.isfinite(f), f, jnp.inf)", "return f",
      "NaN fitness is not mapped to +Inf", SWARMS, None),
-    ("optim/fitness.py", "diff = _row_sum(jnp.abs(R + a * G) - jnp.abs(R - a * G))",
-     "diff = _row_sum(jnp.abs(R - a * G) - jnp.abs(R + a * G))",
+    ("optim/fitness.py", "return jnp.abs(R + a * G) - jnp.abs(R - a * G)",
+     "return jnp.abs(R - a * G) - jnp.abs(R + a * G)",
      "Eq. 17's one-pass antenna difference with its sign flipped", SWARMS, None),
-    ("optim/driver.py", "            if not constant:  # re-rank only when N(t) falls",
-     "            if False:  # re-rank only when N(t) falls",
+    ("optim/driver.py", "            if rerank:\n                state = _rerank(",
+     "            if False:\n                state = _rerank(",
      "the population is never re-ranked when N(t) falls", SWARMS, None),
     ("optim/driver.py", "        key, sub = jax.random.split(key)\n        return key, sub",
      "        key, sub = jax.random.split(key)\n        return key, key",
      "every iteration draws from the same chain key", SWARMS, None),
+    ("optim/fitness.py", "jnp.pad(self.tau, (0, k * c - m))",
+     "jnp.pad(self.tau, (0, k * c - m), constant_values=1.0)",
+     "Eq. 17 in blocks counts the padding rows", KERNELS, None),
+    ("optim/swarm.py", "for r in ((13, 15, 26, 6), (17, 29, 16, 24))[i % 2]:",
+     "for r in ((13, 15, 26, 6), (17, 29, 16, 25))[i % 2]:",
+     "the written-out threefry hash with a wrong rotation", KERNELS, None),
+    ("optim/swarm.py", "(state.nonfinite_total, jnp.zeros(slots, jnp.int32))",
+     "(state.n_nonfinite, jnp.zeros(slots, jnp.int32))",
+     "non-finite evaluations counted per slot are lost when a phase shrinks", KERNELS,
+     None),
     ("optim/linear.py", "RANK_RTOL = 1e-10", "RANK_RTOL = 1e-4",
      "a loose rank tolerance", BASELINES, None),
     ("optim/linear.py", "        scale = _scale(self.norms[self.perm])\n",

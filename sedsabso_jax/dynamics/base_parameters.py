@@ -12,6 +12,7 @@ the usual regrouped names (Khalil & Dombre 2002, Sec. 10.3): ``ZZ1R = ZZ1 + YY2 
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 import scipy.linalg
@@ -68,11 +69,13 @@ class BaseParameters(eqx.Module):
                 f"params must have shape (..., {self.robot.n_params}) for robot "
                 f"{self.robot.name!r}, got {params.shape}"
             )
-        return params @ self.matrix.T
+        return jnp.matmul(params, self.matrix.T, precision=jax.lax.Precision.HIGHEST)
 
-    def regressor(self, q, qd, qdd, *, dtype=jnp.float64) -> Float[Array, "... n rank"]:
-        """Base regressor ``(..., n) -> (..., n, rank)``: the kept columns of ``Y``."""
-        Y = _full_regressor(self.robot, q, qd, qdd, dtype=dtype)
+    def regressor(self, q, qd, qdd, *, dtype=jnp.float64,
+                  memory_budget: int | None = None) -> Float[Array, "... n rank"]:
+        """Base regressor ``(..., n) -> (..., n, rank)``: the kept columns of ``Y``
+        (``memory_budget``: see :func:`~sedsabso_jax.regressor`)."""
+        Y = _full_regressor(self.robot, q, qd, qdd, dtype=dtype, memory_budget=memory_budget)
         return Y[..., jnp.asarray(self.indices)]
 
     @property

@@ -41,7 +41,7 @@ def joint_transforms(robot: Robot, q):
     W = jnp.stack([jnp.stack([zero, -w[:, 2], w[:, 1]], -1),
                    jnp.stack([w[:, 2], zero, -w[:, 0]], -1),
                    jnp.stack([-w[:, 1], w[:, 0], zero], -1)], -2)  # (n, 3, 3)
-    W2 = W @ W
+    W2 = jnp.matmul(W, W, precision=jax.lax.Precision.HIGHEST)  # float32 stays float32
     s, c = jnp.sin(q)[..., None], jnp.cos(q)[..., None]
     Rm = jnp.eye(3, dtype=dtype) + s[..., None] * W + (1.0 - c)[..., None] * W2
     pm = q[..., None] * v + (1.0 - c) * rotate(W, v) + (q[..., None] - s) * rotate(W2, v)

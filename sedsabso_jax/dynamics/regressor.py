@@ -23,27 +23,67 @@ Newton-Euler in the form that is linear in the inertial parameters (Khalil & Dom
    and the friction columns ``sign(qd_j), qd_j`` on the diagonal.
 
 Exact (no differentiation, no approximation), jit-compiled, batched over any leading axes.
-The samples are processed in chunks under ``lax.map`` (see :func:`chunk_size`) so that the
-``(n, n)`` intermediates stay in cache and memory stays bounded for large batches.
+On the CPU the samples are processed in chunks under ``lax.map`` (see :func:`chunk_size`)
+so that the ``(n, n)`` intermediates stay in cache; on a GPU or TPU all at once, or in
+chunks as large as a memory budget in bytes allows.
 """
 
 from __future__ import annotations
 
+import math
 from functools import partial
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from .kinematics import cross, link_poses, rotate, rotate_back
 from .robot import Robot, joint_arrays
 
+#: Bytes a batch of samples may take on an accelerator when no ``memory_budget`` is given.
+DEFAULT_MEMORY_BUDGET = 2**30
+#: The smallest ``memory_budget`` accepted (1 MB).
+MIN_MEMORY_BUDGET = 10**6
 
-def chunk_size(n_joints: int) -> int:
-    """Samples per ``lax.map`` chunk. The intermediates grow as n^2 per sample; measured
-    on a 2-core CPU (benchmarks/regressor.py, 10,000 samples), 16 was fastest for 3
-    joints and 8 for 7 joints (1, 2, 4, 8, 16, 32 tried)."""
-    return 16 if n_joints <= 4 else 8
+
+def check_memory_budget(memory_budget) -> int:
+    """``memory_budget`` in bytes (None: :data:`DEFAULT_MEMORY_BUDGET`); ValueError unless
+    an integer >= :data:`MIN_MEMORY_BUDGET` (1 MB)."""
+    if memory_budget is None:
+        return DEFAULT_MEMORY_BUDGET
+    if (isinstance(memory_budget, bool) or not isinstance(memory_budget, (int, np.integer))
+            or memory_budget < MIN_MEMORY_BUDGET):
+        raise ValueError(f"memory_budget must be an integer number of bytes >= 1 MB "
+                         f"({MIN_MEMORY_BUDGET}), got {memory_budget!r}")
+    return int(memory_budget)
+
+
+def sample_bytes(n_joints: int, itemsize: int = 8) -> int:
+    """An upper estimate of the memory one sample's regressor takes while computed: XLA's
+    CPU code keeps about 22 n^2 numbers of intermediates and writes 12 n^2
+    (``compile().memory_analysis()``, 3 and 7 joints); twice that, for other backends'
+    fusion choices."""
+    return 64 * n_joints**2 * itemsize
+
+
+def chunk_size(n_joints: int, samples: int | None = None, *, itemsize: int = 8,
+               memory_budget=None, backend: str | None = None) -> int | None:
+    """Samples per ``lax.map`` chunk, None for all at once.
+
+    On the CPU the intermediates grow as n^2 per sample and the fastest chunks are small:
+    measured on a 2-core CPU (benchmarks/regressor.py, 10,000 samples), 16 was fastest for
+    3 joints and 8 for 7 joints (1, 2, 4, 8, 16, 32 tried). On an accelerator
+    (``backend``, default ``jax.default_backend()``) all ``samples`` at once (``vmap``),
+    or when they would take more than ``memory_budget`` bytes (:func:`sample_bytes`;
+    default :data:`DEFAULT_MEMORY_BUDGET`) the largest chunks within it."""
+    budget = check_memory_budget(memory_budget)
+    if (backend or jax.default_backend()) == "cpu":
+        return 16 if n_joints <= 4 else 8
+    per_sample = sample_bytes(n_joints, itemsize)
+    if samples is not None and samples * per_sample <= budget:
+        return None
+    return max(1, budget // per_sample)
 
 
 def unchecked_regressor(robot: Robot, q, qd, qdd):
@@ -96,31 +136,48 @@ def unchecked_regressor(robot: Robot, q, qd, qdd):
     return Y.reshape(Y.shape[:-2] + (12 * n,))
 
 
-def _chunked(robot: Robot, q, qd, qdd):
+def _chunked(robot: Robot, q, qd, qdd, chunk: int | None):
     batch, n = q.shape[:-1], q.shape[-1]
     flat = [x.reshape((-1, n)) for x in (q, qd, qdd)]
-    Y = jax.lax.map(lambda s: unchecked_regressor(robot, *s), flat, batch_size=chunk_size(n))
+    if chunk is None or chunk >= flat[0].shape[0]:
+        Y = unchecked_regressor(robot, *flat)  # all samples at once
+    else:
+        Y = jax.lax.map(lambda s: unchecked_regressor(robot, *s), flat, batch_size=chunk)
     return Y.reshape(batch + Y.shape[1:])
 
 
-@partial(jax.jit, static_argnames="dtype")
-def _regressor_jit(robot, q, qd, qdd, dtype):
-    return _chunked(robot, q.astype(dtype), qd.astype(dtype), qdd.astype(dtype))
+@partial(jax.jit, static_argnames=("dtype", "chunk"))
+def _regressor_jit(robot, q, qd, qdd, dtype, chunk=None):
+    return _chunked(robot, q.astype(dtype), qd.astype(dtype), qdd.astype(dtype), chunk)
 
 
-def regressor(robot: Robot, q, qd, qdd, *, dtype=jnp.float64) -> Float[Array, "... n p"]:
+def _chunk_for(robot: Robot, q, dtype, memory_budget):
+    samples = math.prod(q.shape[:-1])
+    return chunk_size(robot.n_joints, samples, itemsize=jnp.dtype(dtype).itemsize,
+                      memory_budget=memory_budget)
+
+
+def regressor(robot: Robot, q, qd, qdd, *, dtype=jnp.float64,
+              memory_budget: int | None = None) -> Float[Array, "... n p"]:
     """Joint-torque regressor ``Y`` with ``tau = Y @ robot.params`` (Eq. 2).
 
     ``q, qd, qdd`` of shape ``(..., n)`` (leading axes broadcast) give ``(..., n, 12 n)``,
     columns ordered as :attr:`Robot.param_names`. Computed in ``dtype`` (float64 by
-    default). Compiled once per robot structure, batch shape and dtype.
+    default). ``memory_budget``: bytes the samples may take at once on an accelerator
+    (:func:`chunk_size`; at least 1 MB). Compiled once per robot structure, batch shape,
+    dtype and chunk size.
     """
+    check_memory_budget(memory_budget)
     q, qd, qdd = joint_arrays(robot, ("q", q), ("qd", qd), ("qdd", qdd), dtype=dtype)
-    return _regressor_jit(robot, q, qd, qdd, jnp.dtype(dtype))
+    chunk = _chunk_for(robot, q, dtype, memory_budget)
+    return _regressor_jit(robot, q, qd, qdd, jnp.dtype(dtype), chunk)
 
 
-def inverse_dynamics(robot: Robot, params, q, qd, qdd) -> Float[Array, "... n"]:
-    """Joint torques ``tau = Y(q, qd, qdd) @ params`` (Eq. 1-2), ``(..., n)``, float64."""
+def inverse_dynamics(robot: Robot, params, q, qd, qdd, *,
+                     memory_budget: int | None = None) -> Float[Array, "... n"]:
+    """Joint torques ``tau = Y(q, qd, qdd) @ params`` (Eq. 1-2), ``(..., n)``, float64;
+    ``memory_budget`` as for :func:`regressor`."""
+    check_memory_budget(memory_budget)
     q, qd, qdd = joint_arrays(robot, ("q", q), ("qd", qd), ("qdd", qdd))
     params = jnp.asarray(params, dtype=jnp.float64)
     if params.shape != (robot.n_params,):
@@ -129,4 +186,6 @@ def inverse_dynamics(robot: Robot, params, q, qd, qdd) -> Float[Array, "... n"]:
             f"(12 per joint), got {params.shape}"
         )
     # Reuses the regressor's compiled code: one compilation serves both functions.
-    return _regressor_jit(robot, q, qd, qdd, jnp.dtype(jnp.float64)) @ params
+    chunk = _chunk_for(robot, q, jnp.float64, memory_budget)
+    Y = _regressor_jit(robot, q, qd, qdd, jnp.dtype(jnp.float64), chunk)
+    return jnp.matmul(Y, params, precision=jax.lax.Precision.HIGHEST)

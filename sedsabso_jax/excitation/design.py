@@ -63,6 +63,7 @@ from .. import _deprecation
 from .._output import jsonable
 from ..dynamics.base_parameters import BaseParameters, base_parameters
 from ..dynamics.limits import JointLimits
+from ..dynamics.regressor import check_memory_budget, sample_bytes
 from ..dynamics.robot import Robot
 from ..optim.box import check_bounds
 from ..optim.driver import minimise
@@ -79,9 +80,22 @@ DEFAULT_DURATION = 10.0
 DEFAULT_RATE = 100.0
 DEFAULT_DESIGN_SAMPLES = 100
 DEFAULT_ITERATIONS = 100
-#: Random draws per compiled batch of the random baseline: small batches stay in cache
-#: (4040 draws on the 2-core CPU: 1.8 s in batches of 40, 2.5 s of 128, 3.2 s of 256).
+#: Random draws per compiled batch of the random baseline on the CPU: small batches stay
+#: in cache (4040 draws on the 2-core CPU: 1.8 s in batches of 40, 2.5 s of 128, 3.2 s
+#: of 256).
 RANDOM_BATCH = 40
+
+
+def random_batch(draws: int, n_joints: int, design_samples: int, memory_budget=None) -> int:
+    """Random draws per compiled batch of the random baseline: :data:`RANDOM_BATCH` on the
+    CPU; on an accelerator all ``draws`` at once, or as many as ``memory_budget`` bytes
+    allow (each draw evaluates the regressor at ``design_samples`` times twice; at least
+    one draw)."""
+    budget = check_memory_budget(memory_budget)
+    if jax.default_backend() == "cpu":
+        return RANDOM_BATCH
+    per_draw = 2 * design_samples * sample_bytes(n_joints)
+    return int(max(1, min(draws, budget // per_draw)))
 
 
 @eqx.filter_jit
@@ -205,7 +219,8 @@ def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = D
                       solver: AbstractSwarm | None = None,
                       iterations: int = DEFAULT_ITERATIONS, key=None,
                       graded_penalty: bool = True,
-                      base: BaseParameters | None = None) -> ExcitationDesign:
+                      base: BaseParameters | None = None,
+                      memory_budget: int | None = None) -> ExcitationDesign:
     """Design an excitation trajectory by Eq. 9 with a swarm; compare with random search.
 
     The experiment samples ``times = arange(round(duration * rate)) / rate``. The swarm's
@@ -216,7 +231,10 @@ def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = D
     docstring. ``solver``: any of the package's swarms (default :func:`default_solver`),
     run for ``iterations``; ``key``: a JAX PRNG key or an int seed (default 0), the same
     key giving the same design; ``base``: the robot's base parameters when already
-    computed. Raises RuntimeError when the swarm found no feasible trajectory.
+    computed; ``memory_budget``: bytes the random baseline's batches and the final
+    condition number may take at once on an accelerator (at least 1 MB; see
+    :func:`random_batch`); the CPU keeps its small cache-sized batches. Raises
+    RuntimeError when the swarm found no feasible trajectory.
     """
     if not isinstance(robot, Robot):
         raise TypeError(f"robot must be a Robot, got {type(robot).__name__}")
@@ -239,6 +257,7 @@ def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = D
         raise ValueError(f"duration * rate must give at least 2 samples, got {n_samples}")
     if not isinstance(graded_penalty, (bool, np.bool_)):
         raise TypeError(f"graded_penalty must be True or False, got {graded_penalty!r}")
+    check_memory_budget(memory_budget)
     base = base_parameters(robot) if base is None else base
     if not isinstance(base, BaseParameters) or base.robot.n_params != robot.n_params:
         raise ValueError(f"base must be the BaseParameters of robot {robot.name!r} "
@@ -264,13 +283,13 @@ def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = D
             "give the swarm more iterations or a larger population")
     traj = FourierTrajectory.from_vector(result.x, n, n_harmonics, wf)
     check_trajectory(traj, limits, times)
-    cond = condition_number(base, *traj.sample(times))
+    cond = condition_number(base, *traj.sample(times), memory_budget=memory_budget)
 
     # Random baseline: as many uniform draws from the same box as the swarm's evaluations,
     # in batches of a fixed size (one compilation), the best by the same fitness.
     t0 = time.perf_counter()
     budget = int(result.n_evaluations)
-    batch = RANDOM_BATCH
+    batch = random_batch(budget, n, int(design_samples), memory_budget)
     lo, hi = jnp.asarray(lower), jnp.asarray(upper)
     best_x, best_f, n_feasible = None, math.inf, 0
     for i in range(math.ceil(budget / batch)):
@@ -283,7 +302,8 @@ def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = D
     random_traj, random_cond = None, math.inf
     if best_f < PENALTY:
         random_traj = FourierTrajectory.from_vector(best_x, n, n_harmonics, wf)
-        random_cond = condition_number(base, *random_traj.sample(times))
+        random_cond = condition_number(base, *random_traj.sample(times),
+                                       memory_budget=memory_budget)
     return ExcitationDesign(
         trajectory=traj, cond=cond, random_cond=random_cond, times=times, result=result,
         random_trajectory=random_traj, design_cond=float(result.f), n_random=budget,

@@ -7,12 +7,13 @@ from __future__ import annotations
 import math
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
 from ..dynamics.base_parameters import BaseParameters
-from ..dynamics.regressor import unchecked_regressor
+from ..dynamics.regressor import check_memory_budget, sample_bytes, unchecked_regressor
 from ..dynamics.robot import Robot
 from .trajectory import basis, evaluate
 
@@ -24,18 +25,33 @@ PENALTY = 1e8
 LIMIT_MARGIN = 1e-9
 
 
-#: Samples per regressor call in :func:`condition_number`: the batch shape that
-#: :func:`~sedsabso_jax.base_parameters` has already compiled (50 states).
+#: Samples per regressor call in :func:`condition_number` on the CPU: the batch shape
+#: that :func:`~sedsabso_jax.base_parameters` has already compiled (50 states).
 _COND_CHUNK = 50
 
 
-def condition_number(base: BaseParameters, q, qd, qdd) -> float:
+def condition_samples(n_joints: int, samples: int, memory_budget=None) -> int:
+    """Samples per regressor call in :func:`condition_number`: on the CPU 50 (a shape
+    already compiled, so no new compilation for any ``T``); on an accelerator all of
+    them, a multiple of 50, or as many multiples of 50 as ``memory_budget`` bytes allow
+    (at least 50)."""
+    budget = check_memory_budget(memory_budget)
+    if jax.default_backend() == "cpu":
+        return _COND_CHUNK
+    fit = max(1, budget // (_COND_CHUNK * sample_bytes(n_joints)))
+    return _COND_CHUNK * min(fit, -(-samples // _COND_CHUNK))
+
+
+def condition_number(base: BaseParameters, q, qd, qdd, *, memory_budget=None) -> float:
     """2-norm condition number of the stacked base regressor ``W_b`` (Eq. 8) at the samples
     ``(T, n)``: ``sigma_max / sigma_min`` by an SVD (``inf`` when rank-deficient).
 
-    The regressor is evaluated 50 samples at a time, the batch shape that
-    ``base_parameters`` compiles by default, so no new compilation is needed for any ``T``."""
+    The regressor is evaluated in blocks of :func:`condition_samples` samples: 50 on the
+    CPU, the batch shape that ``base_parameters`` compiles by default, so no new
+    compilation is needed for any ``T``; on an accelerator at once, or in blocks within
+    ``memory_budget`` bytes."""
     n = base.robot.n_joints
+    check_memory_budget(memory_budget)
     arrays = []
     for name, value in (("q", q), ("qd", qd), ("qdd", qdd)):
         arr = np.asarray(value, dtype=float)
@@ -48,10 +64,11 @@ def condition_number(base: BaseParameters, q, qd, qdd) -> float:
         raise ValueError(f"q, qd, qdd must have one shape, got "
                          f"{[a.shape for a in arrays]}")
     T = arrays[0].shape[0]
-    pad = -T % _COND_CHUNK
+    chunk = condition_samples(n, T, memory_budget)
+    pad = -T % chunk
     padded = [np.concatenate([a, np.zeros((pad, n))]) for a in arrays]
-    blocks = [np.asarray(base.regressor(*(a[i: i + _COND_CHUNK] for a in padded)))
-              for i in range(0, T + pad, _COND_CHUNK)]
+    blocks = [np.asarray(base.regressor(*(a[i: i + chunk] for a in padded)))
+              for i in range(0, T + pad, chunk)]
     W = np.concatenate(blocks)[:T].reshape(-1, base.rank)
     s = np.linalg.svd(W, compute_uv=False)
     return float(s[0] / s[-1]) if s[-1] > 0 else math.inf
@@ -62,7 +79,7 @@ def _gram_condition_number(W):
     instead of an SVD of the tall W (several times faster under vmap on a CPU); accurate
     while cond(W) << 1e8, which covers every trajectory worth keeping. ``inf`` when
     ``lambda_min <= 0`` (rank-deficient)."""
-    lam = jnp.linalg.eigvalsh(W.T @ W)
+    lam = jnp.linalg.eigvalsh(jnp.matmul(W.T, W, precision=jax.lax.Precision.HIGHEST))
     return jnp.where(lam[0] > 0, jnp.sqrt(lam[-1] / jnp.where(lam[0] > 0, lam[0], 1.0)),
                      jnp.inf)
 

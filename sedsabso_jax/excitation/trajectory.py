@@ -70,11 +70,20 @@ def check_wf(wf) -> float:
 
 def evaluate(a, b, q0, kw, c, s):
     """``(q, qd, qdd)`` from coefficients ``(n, N)`` and ``c = cos(k wf t)``,
-    ``s = sin(k wf t)`` of shape ``(..., N)``; ``kw = k wf``. Returns ``(..., n)`` each."""
-    qd = c @ a.T - s @ b.T
-    q = q0 + s @ (a / kw).T + c @ (b / kw).T
-    qdd = -(s @ (a * kw).T) - c @ (b * kw).T
+    ``s = sin(k wf t)`` of shape ``(..., N)``; ``kw = k wf``. Returns ``(..., n)`` each
+    (numpy for numpy arguments)."""
+    qd = _mm(c, a.T) - _mm(s, b.T)
+    q = q0 + _mm(s, (a / kw).T) + _mm(c, (b / kw).T)
+    qdd = -_mm(s, (a * kw).T) - _mm(c, (b * kw).T)
     return q, qd, qdd
+
+
+def _mm(x, y):
+    # numpy stays numpy; JAX products at full precision (no TF32 passes for float32 on
+    # a GPU)
+    if isinstance(x, np.ndarray) and isinstance(y, np.ndarray):
+        return x @ y
+    return jnp.matmul(x, y, precision=jax.lax.Precision.HIGHEST)
 
 
 def basis(times, n_harmonics: int, wf: float):

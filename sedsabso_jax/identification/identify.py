@@ -304,8 +304,7 @@ def fit_regressor(setup: Setup, Y, tau, *, warn: bool = True) -> RegressorFit:
         extra.update(steps=int(result.n_evaluations), compile_s=float(result.compile_s),
                      run_s=float(result.run_s))
     else:
-        x, result, extra = _swarm(method, setup.model, W, b, setup.prior, setup.box,
-                                  setup.runs, setup.iterations, setup.seed, setup.solver)
+        x, result, extra = _swarm(setup, W, b)
     return RegressorFit(x=np.asarray(x, dtype=float), full=full, sigma=np.asarray(sigma),
                         factor0=factor0, W=W, b=b, result=result, extra=extra)
 
@@ -380,20 +379,25 @@ def identify(robot: Robot, q, qd, qdd, tau, *, method: str = "OLS",
                           fit=jsonable(fit), full_params=out.full, result=out.result)
 
 
-def _swarm(method, model, W, b, prior, box, runs, iterations, seed, solver):
-    """The swarm ``solver`` on the weighted L1 objective in the box; the best of the runs."""
-    d = model.dim
-    centre = np.concatenate([np.asarray(model.base.project(prior)),
+def swarm_box(setup: Setup) -> tuple[np.ndarray, np.ndarray, Any]:
+    """``(lower, upper, setting)``: the swarms' search box of ``setup`` (see
+    :func:`identify`'s ``box``): around the prior projected on the base parameters, the
+    extra columns centred on 0, or the explicit arrays."""
+    model, d = setup.model, setup.model.dim
+    lo_hi = _box_arrays(setup.box, d)
+    if lo_hi is not None:
+        return *lo_hi, "explicit"
+    centre = np.concatenate([np.asarray(model.base.project(setup.prior)),
                              np.zeros(d - model.base.rank)])
-    box_setting: Any
-    lo_hi = _box_arrays(box, d)
-    if lo_hi is None:
-        fraction, floor = (float(v) for v in box)
-        lower, upper = box_around(centre, fraction, floor)
-        box_setting = {"fraction": fraction, "floor": floor, "centre": "prior"}
-    else:
-        lower, upper = lo_hi
-        box_setting = "explicit"
+    fraction, floor = (float(v) for v in setup.box)
+    lower, upper = box_around(centre, fraction, floor)
+    return lower, upper, {"fraction": fraction, "floor": floor, "centre": "prior"}
+
+
+def _swarm(setup, W, b):
+    """The swarm on the weighted L1 objective in the box; the best of the runs."""
+    solver, runs, iterations, seed = setup.solver, setup.runs, setup.iterations, setup.seed
+    lower, upper, box_setting = swarm_box(setup)
     res = minimise(L1Residual(W, b), solver, lower, upper, key=jax.random.key(seed),
                    iterations=int(iterations), runs=int(runs))
     X, f = np.atleast_2d(np.asarray(res.x)), np.atleast_1d(np.asarray(res.f))

@@ -12,8 +12,10 @@ Sec. 3)::
 The authors' code uses ``+delta V sign(...)``, which moves toward the WORSE antenna when
 minimising; ``literal_sign=True`` restores it. With a linear fitness embedding (Eq. 17)
 the antennae cost no product with ``W`` (``W xl = W x + d/2 W V``) and only their
-difference is needed, one pass over the residuals (``|r + g| - |r - g|`` summed), so an
-iteration costs two products with ``W`` (new positions and velocities) for 3 evaluations.
+difference is needed, so an iteration costs one product with ``W`` (new positions and
+velocities stacked) and one pass over the residuals for 3 evaluations: the antennae of
+the new positions are evaluated with them and carried to the next iteration as one
+number per beetle (:meth:`~.fitness.L1Residual.evaluate_with_antennae`).
 
 :class:`BeetleSwarm` holds this step and its hyperparameters; :class:`BSO` runs it with a
 constant population, :class:`~sedsabso_jax.SEDSABSO` adds annealing and a shrinking one.
@@ -29,7 +31,7 @@ from .swarm import (
     check_population,
     check_velocity_update,
     evaluate,
-    uniforms,
+    initial_state,
     update_bests,
 )
 
@@ -54,14 +56,29 @@ class BeetleSwarm(AbstractSwarm):
         if self.delta <= 0 or self.c <= 0:
             raise ValueError(f"delta and c must be > 0, got delta={self.delta}, c={self.c}")
 
+    def evaluations(self, n_active):
+        """Three per beetle: its new position and its two antennae (Eq. 12)."""
+        return 3 * n_active
+
+    @property
+    def antenna(self) -> float:
+        """``a``: the antennae sit at ``x +- a V``, ``a = d / 2`` with ``d = delta / c``
+        (Eq. 13)."""
+        d = self.delta / self.c
+        return 0.5 * d
+
+    def init(self, fitness, lower, upper, key):
+        """The initial population (uniform in the box, velocities in ``+-Vmax``) with its
+        antennae evaluated."""
+        return initial_state(fitness, lower, upper, key, self.n_slots,
+                             self.vmax_fraction * (upper - lower), antenna=self.antenna)
+
     def beetle_step(self, fitness, s, lower, upper, r1, r2):
         """Eq. 10-13 for every slot, with ``r1, r2`` the uniform draws of Eq. 11; returns
         the state with bests updated and the swarm's global best (x, f) among the active
-        slots."""
-        d = self.delta / self.c
-        diff, bad_a = fitness.antenna_difference(s.ex, s.ev, 0.5 * d)  # f(xl) - f(xr)
-        bad_a = jnp.sum(jnp.where(s.active, bad_a, 0), dtype=jnp.int32)
-        direction = jnp.nan_to_num(jnp.sign(diff))  # inf - inf: no preference
+        slots. The antenna difference ``f(xl) - f(xr)`` at the current positions is the
+        state's (computed with their fitness); the new positions' is computed here."""
+        direction = jnp.nan_to_num(jnp.sign(s.antennae))  # inf - inf: no preference
         if not self.literal_sign:
             direction = -direction
         xi = self.delta * s.v * direction[:, None]
@@ -69,13 +86,14 @@ class BeetleSwarm(AbstractSwarm):
         v = self.w * s.v + self.c1 * r1 * (s.pbest_x - s.x) + self.c2 * r2 * (s.guide_x - s.x)
         v = jnp.clip(v, -vmax, vmax)
         x = jnp.clip(s.x + self.lam * v + (1.0 - self.lam) * xi, lower, upper)
-        ex, ev = fitness.embed(x), fitness.embed(v)
-        f, bad = evaluate(fitness, ex, s.active)
+        raw, diff, diff_bad = fitness.evaluate_with_antennae(x, v, self.antenna)
+        f, bad = evaluate(fitness, x, s.active, raw)
+        bad = s.slot_nonfinite + bad + jnp.where(s.active, s.antennae_bad, 0)
         n_active = jnp.sum(s.active, dtype=jnp.int32)
         s = eqx.tree_at(
-            lambda s: (s.v, s.ev, s.n_evaluations, s.n_nonfinite), s,
-            (v, ev, s.n_evaluations + 3 * n_active, s.n_nonfinite + bad + bad_a))
-        return update_bests(s, x, ex, f)
+            lambda s: (s.v, s.antennae, s.antennae_bad, s.n_evaluations, s.slot_nonfinite), s,
+            (v, diff, diff_bad, s.n_evaluations + 3 * n_active, bad))
+        return update_bests(s, x, f)
 
 
 class BSO(BeetleSwarm):
@@ -97,7 +115,7 @@ class BSO(BeetleSwarm):
         check_population(self.n_beetles, "n_beetles")
         super().check()
 
-    def step(self, fitness, s, t, iterations, lower, upper, keys):
-        r1, r2 = uniforms(keys, s.x.shape, s.x.dtype)
+    def step(self, fitness, s, t, iterations, lower, upper, draws):
+        r1, r2 = draws
         s, (gx, gf) = self.beetle_step(fitness, s, lower, upper, r1, r2)
         return eqx.tree_at(lambda s: (s.guide_x, s.guide_f), s, (gx, gf))

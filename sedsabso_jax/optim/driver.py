@@ -9,7 +9,9 @@ counts (:func:`~.swarm.phases`), so the work follows the active count.
 
 from __future__ import annotations
 
+import contextvars
 import math
+import os
 import time
 
 import equinox as eqx
@@ -18,6 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .box import check_bounds
+from .external import Evosax
 from .fitness import as_fitness
 from .result import Result
 from .swarm import AbstractSwarm, phases, set_active, shrink
@@ -27,10 +30,9 @@ def iteration_randomness(solver, key, iterations: int, dim: int, dtype):
     """Every iteration's randomness, derived before the loop: the chain
     ``key, sub = split(key)`` gives iteration t its key ``sub``, from which
     ``solver.randomness`` derives keys (or small draws), vectorised over the iterations.
-    Inside the loop a step then makes one batched draw for the population: on the CPU
-    every ``jax.random`` call is a small loop of its own, a fixed cost per iteration
-    (SEDSABSO made nine per iteration, now one). The numbers are the same as drawing
-    each inside the loop."""
+    The population's draws (``solver.draw``) are then made per phase before its loop
+    (:func:`_single_run`) or inside it. The numbers are the same either way, and the same
+    as drawing each inside the loop."""
     def chain(key, _):
         key, sub = jax.random.split(key)
         return key, sub
@@ -39,31 +41,75 @@ def iteration_randomness(solver, key, iterations: int, dim: int, dtype):
     return jax.vmap(lambda k: solver.randomness(k, dim, dtype))(subs)
 
 
+#: Largest pre-drawn randomness per phase of one run (bytes), see :func:`_single_run`.
+PREDRAW_BYTES = 32 * 2**20
+#: Runs traced together in one vmapped call (1 while a run is traced on its own).
+_IN_FLIGHT = contextvars.ContextVar("in_flight", default=1)
+
+
+def _predraws(solver, randomness, shape, dtype, length: int) -> bool:
+    """Whether one phase's population draws are made before its loop: on the CPU, for a
+    run traced on its own, when they take at most :data:`PREDRAW_BYTES`. Inside the loop
+    XLA fuses the hash into each fusion that reads a draw, and computes it there again:
+    with ``PREDRAW_BYTES = 0`` a float64 run took 56 % longer for LDWPSO (122 vs 79 ms),
+    32 % for BSO (184 vs 140 ms), 23 % for SEDSABSO (213 vs 172 ms) (2-core AMD EPYC,
+    same process, fastest of 9 seeds). On an accelerator the draws stay in the loop,
+    where recomputing them is cheap and memory is not spent on them."""
+    if jax.default_backend() != "cpu" or _IN_FLIGHT.get() > 1:
+        return False
+    one = jax.tree.map(lambda r: r[0], randomness)
+    out = jax.eval_shape(lambda r: solver.draw(r, shape, dtype), one)
+    size = sum(math.prod(o.shape) * o.dtype.itemsize for o in jax.tree.leaves(out))
+    return size * length <= PREDRAW_BYTES
+
+
+def _rerank(state, n_active, drop):
+    """``set_active(state, n_active)`` where ``drop`` (N(t) falls at this iteration, known
+    from the static schedule): a select on accelerators, where a ``lax.cond`` would read
+    its predicate back to the host every iteration; a ``lax.cond`` on the CPU, which
+    skips the sort when nothing falls."""
+    if jax.default_backend() == "cpu":
+        return jax.lax.cond(drop, set_active, lambda s, n: s, state, n_active)
+    return eqx.tree_at(lambda s: s.active, state,
+                       jnp.where(drop, set_active(state, n_active).active, state.active))
+
+
 def _single_run(solver: AbstractSwarm, fitness, lower, upper, key, iterations: int):
+    """One run: the phases of :func:`~.swarm.phases`, each a ``lax.scan``. Where N(t)
+    falls is static: the active count before iteration t is N(t - 1) (N(a) after a phase
+    starting at a has shrunk the slots), so the history of N is the schedule itself."""
     sched = solver.schedule(iterations)
     key, k0 = jax.random.split(key)
     state = set_active(solver.init(fitness, lower, upper, k0), int(sched[0]))
-    hist_f, hist_n = [], []
-    keys = iteration_randomness(solver, key, iterations, lower.shape[0], lower.dtype)
+    dim, dtype = lower.shape[0], lower.dtype
+    rand = iteration_randomness(solver, key, iterations, dim, dtype)
+    hist_f = []
     for a, b, slots in phases(sched, solver.n_phases):
         state = shrink(state, slots)
-        n_t = jnp.asarray(sched[a:b], jnp.int32)
-        constant = bool(np.all(sched[a:b] == slots))  # every slot active: nothing to drop
+        before = np.concatenate([[min(sched[max(a - 1, 0)], slots)], sched[a:b - 1]])
+        drops = sched[a:b] < before  # N(t) falls: re-rank, the worst leave
+        shape = (slots, dim)
+        fit = fitness.blocked(slots * _IN_FLIGHT.get())  # the layout for them, made once
+        phase_rand = jax.tree.map(lambda r, a=a, b=b: r[a:b], rand)
+        predraw = _predraws(solver, phase_rand, shape, dtype, b - a)
+        if predraw:
+            phase_rand = jax.vmap(lambda r, shape=shape: solver.draw(r, shape, dtype))(
+                phase_rand)
 
-        def body(state, inp, constant=constant):
-            t, n_active, key = inp
-            if not constant:  # re-rank only when N(t) falls
-                state = jax.lax.cond(n_active < jnp.sum(state.active), set_active,
-                                     lambda s, n: s, state, n_active)
-            state = solver.step(fitness, state, t, iterations, lower, upper, key)
-            return state, (state.best_f, jnp.sum(state.active, dtype=jnp.int32))
+        def body(state, inp, predraw=predraw, shape=shape, rerank=bool(drops.any()), fit=fit):
+            t, n_active, drop, r = inp
+            if rerank:
+                state = _rerank(state, n_active, drop)
+            draws = r if predraw else solver.draw(r, shape, dtype)
+            state = solver.step(fit, state, t, iterations, lower, upper, draws)
+            return state, state.best_f
 
-        phase_keys = jax.tree.map(lambda k: k[a:b], keys)
-        state, (fh, nh) = jax.lax.scan(body, state, (jnp.arange(a, b), n_t, phase_keys))
+        inputs = (jnp.arange(a, b), jnp.asarray(sched[a:b], jnp.int32), jnp.asarray(drops),
+                  phase_rand)
+        state, fh = jax.lax.scan(body, state, inputs)
         hist_f.append(fh)
-        hist_n.append(nh)
-    return (state.best_x, state.best_f, jnp.concatenate(hist_f), jnp.concatenate(hist_n),
-            state.sa_accepted, state.n_evaluations, state.n_nonfinite)
+    return (state.best_x, state.best_f, jnp.concatenate(hist_f), jnp.asarray(sched, jnp.int32),
+            state.sa_accepted, state.n_evaluations, state.nonfinite_total)
 
 
 _COMPILED: dict = {}
@@ -87,6 +133,8 @@ def _compiled(fn, static, *args):
 def _run_one(static, solver_dyn, fitness, lower, upper, key):
     solver_static, iterations = static[:2]
     solver = eqx.combine(solver_dyn, solver_static)
+    if isinstance(solver, Evosax):
+        return solver.single_run(fitness, lower, upper, key, iterations)
     return _single_run(solver, fitness, lower, upper, key, iterations)
 
 
@@ -96,10 +144,14 @@ def _run_many(static, solver_dyn, fitness, lower, upper, keys, n_runs):
     single run without a second compilation."""
     one = lambda k: _run_one(static, solver_dyn, fitness, lower, upper, k)  # noqa: E731
     batch = static[2]
-    if batch == "vmap":
-        return jax.vmap(one)(keys)
-    if batch > 1:
-        return jax.lax.map(one, keys, batch_size=batch)  # chunks of vmapped runs
+    if batch == "vmap" or batch > 1:
+        token = _IN_FLIGHT.set(keys.shape[0] if batch == "vmap" else batch)
+        try:
+            if batch == "vmap":
+                return jax.vmap(one)(keys)
+            return jax.lax.map(one, keys, batch_size=batch)  # chunks of vmapped runs
+        finally:
+            _IN_FLIGHT.reset(token)
 
     def body(i, out):
         return jax.tree.map(lambda o, r: o.at[i].set(r), out, one(keys[i]))
@@ -109,33 +161,95 @@ def _run_many(static, solver_dyn, fitness, lower, upper, keys, n_runs):
     return jax.lax.fori_loop(0, n_runs, body, out)
 
 
-def _batching(batch, runs: int, sharded: bool):
+def _batching(batch, runs: int, sharded: bool, run_bytes: tuple[int, int] = (0, 0)):
     """How ``runs`` runs share one compiled call: ``"vmap"`` (all at once) or an int k
-    (``lax.map`` in chunks of k vmapped runs). ``"auto"``: vmap on accelerators and when
-    sharded over several devices; on a single CPU device runs in sequence (k = 1), which
-    compiles fastest and lets one run be timed through the same executable
-    (:func:`time_one_of_many`). For throughput on the CPU, chunks of 5 measured best
-    (2-core CPU, SEDSABSO, 10 runs, fastest of 3: float64 5.3 s vs 6.4 s in sequence and
-    6.6 s all vmapped; float32 2.6 / 3.5 / 3.0 s; compilation 2-4 s longer)."""
+    (``lax.map`` in chunks of k vmapped runs). ``"auto"``: on a single CPU device runs in
+    sequence (k = 1), which compiles fastest and lets one run be timed through the same
+    executable (:func:`time_one_of_many`); on accelerators and when sharded over several
+    devices vmap, or on one accelerator the largest chunks that fit :func:`memory_limit`
+    when all runs at once would not. ``run_bytes``: a run's memory while in flight and
+    its output (:func:`run_bytes`). Runs that do not fit (an explicit ``"vmap"`` or
+    chunk, or one run alone) raise ValueError naming the limit, before anything
+    compiles. For throughput on the CPU, chunks of 5 measured best (2-core CPU, SEDSABSO,
+    10 runs, fastest of 3: float64 5.3 s vs 6.4 s in sequence and 6.6 s all vmapped;
+    float32 2.6 / 3.5 / 3.0 s; compilation 2-4 s longer)."""
+    devices = jax.devices()
+    per_device = math.ceil(runs / len(devices)) if sharded else runs
+    limit, where = memory_limit(devices[0])
+    flight, out = run_bytes
+    need = lambda k: k * flight + per_device * out  # noqa: E731
+    fits = lambda k: limit is None or need(k) <= limit  # noqa: E731
+
+    def too_big(k, what):
+        return ValueError(
+            f"{what}: {per_device} run(s) with {k} in flight need about "
+            f"{need(k) / 2**30:.3g} GiB, more than the limit of {limit / 2**30:.3g} GiB "
+            f"({where}); use fewer runs or a smaller batch=k")
+
     if batch == "auto":
-        cpu = jax.default_backend() == "cpu"
-        return 1 if cpu and not sharded else "vmap"
+        if jax.default_backend() == "cpu" and not sharded:
+            batch = 1
+        elif fits(per_device) or sharded:
+            batch = "vmap"
+        else:
+            batch = max(1, int((limit - per_device * out) // max(flight, 1)))
     if batch == "vmap":
+        if not fits(per_device):
+            raise too_big(per_device, "batch='vmap'")
         return batch
     if isinstance(batch, (int, np.integer)) and not isinstance(batch, bool) and batch >= 1:
         if sharded:
             raise ValueError("batch must be 'vmap' or 'auto' when runs are sharded over "
                              "several devices (shard=False to run them on one)")
-        return int(min(batch, runs))
+        batch = int(min(batch, runs))
+        if not fits(batch):
+            raise too_big(batch, f"batch={batch}")
+        return batch
     raise ValueError(f"batch must be 'auto', 'vmap' or an integer >= 1, got {batch!r}")
+
+
+def memory_limit(device) -> tuple[int | None, str]:
+    """``(bytes, what)``: how much memory runs in flight may take on ``device``: half of
+    its memory (``memory_stats()["bytes_limit"]`` on a GPU or TPU; the machine's RAM for
+    the CPU), the rest left to XLA's own buffers and everything else. ``None`` when
+    unknown."""
+    stats = None
+    try:
+        stats = device.memory_stats()
+    except Exception:  # noqa: BLE001 - not every backend implements it
+        pass
+    if stats and stats.get("bytes_limit"):
+        total, what = int(stats["bytes_limit"]), f"half of {device.device_kind}'s memory"
+    elif device.platform == "cpu" and hasattr(os, "sysconf"):
+        total, what = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"), "half the RAM"
+    else:
+        return None, "unknown"
+    return total // 2, f"{what}, {total / 2**30:.3g} GiB"
+
+
+def run_bytes(solver, fitness, dim: int, dtype, iterations: int) -> tuple[int, int]:
+    """Upper estimates, in bytes, of ``(one run's memory while in flight, its output)``:
+    the population's arrays of the fitness's size (Eq. 17: members x m residuals, about
+    6 live at once without blocking), its state and per-iteration randomness; the output
+    is the run's history. For a black box, what ``fn`` allocates inside is not
+    counted."""
+    itemsize = jnp.dtype(dtype).itemsize
+    slots = getattr(solver, "n_slots", None)
+    if slots is None:  # another kind of solver (an evosax strategy): its population
+        population = getattr(solver, "population", None)
+        slots = population(dim) if callable(population) else 1
+    m = getattr(getattr(fitness, "tau", None), "shape", (dim,))[0]
+    flight = (6 * slots * max(m, dim) * itemsize + 12 * slots * dim * itemsize
+              + iterations * 16 * (dim + 8))  # keys and small draws per iteration
+    return int(flight), int(iterations * (itemsize + 4) + 4 * dim * itemsize)
 
 
 def _prepare(fitness, solver, lower, upper, key, iterations, runs, args, dtype, shard,
              batch="auto"):
     """Check everything and build the compiled function's arguments (nothing runs)."""
-    if not isinstance(solver, AbstractSwarm):
+    if not isinstance(solver, (AbstractSwarm, Evosax)):
         raise TypeError(f"solver must be a swarm (SEDSABSO, BSO, LDWPSO or another "
-                        f"AbstractSwarm), got {type(solver).__name__}")
+                        f"AbstractSwarm) or an Evosax strategy, got {type(solver).__name__}")
     if not isinstance(iterations, (int, np.integer)) or iterations < 1:
         raise ValueError(f"iterations must be an integer >= 1, got {iterations!r}")
     if runs is not None and (not isinstance(runs, (int, np.integer)) or runs < 1):
@@ -154,10 +268,11 @@ def _prepare(fitness, solver, lower, upper, key, iterations, runs, args, dtype, 
     dyn = jax.tree.map(cast, dyn)
     if runs is None:
         return _run_one, (static, int(iterations)), (dyn, fitness, lo, hi, key)
-    keys = jax.random.split(key, runs)
     devices = jax.devices()
     sharded = shard and len(devices) > 1
-    static_key = (static, int(iterations), _batching(batch, runs, sharded))
+    static_key = (static, int(iterations), _batching(
+        batch, runs, sharded, run_bytes(solver, fitness, lo.shape[0], dtype, iterations)))
+    keys = jax.random.split(key, runs)
     if sharded:
         # pad the runs to a multiple of the device count; the extra runs are dropped
         padded = math.ceil(runs / len(devices)) * len(devices)
@@ -192,7 +307,8 @@ def time_one_of_many(fitness, solver: AbstractSwarm, lower, upper, *, key, itera
 def minimise(fitness, solver: AbstractSwarm, lower, upper, *, key, iterations: int = 600,
              runs: int | None = None, args=None, dtype=jnp.float64, shard: bool = True,
              batch="auto") -> Result:
-    """Minimise ``fitness`` over the box ``[lower, upper]`` with a swarm.
+    """Minimise ``fitness`` over the box ``[lower, upper]`` with a swarm (or an evosax
+    strategy through :class:`~.external.Evosax`).
 
     ``fitness``: a callable ``f(x, args) -> scalar`` (evaluated under ``vmap``) or an
     :class:`~sedsabso_jax.L1Residual` (the paper's Eq. 17, evaluated through
@@ -212,6 +328,7 @@ def minimise(fitness, solver: AbstractSwarm, lower, upper, *, key, iterations: i
         out = tuple(o[:runs] for o in out)
     run_s = time.perf_counter() - t0
     x, f, hf, hn, sa, ne, nn = out
-    return Result(method=type(solver).__name__, x=x, f=f, history_f=hf, history_n=hn,
+    method = f"evosax {solver.name}" if isinstance(solver, Evosax) else type(solver).__name__
+    return Result(method=method, x=x, f=f, history_f=hf, history_n=hn,
                   sa_accepted=sa, n_evaluations=ne, n_nonfinite=nn, compile_s=compile_s,
                   run_s=run_s)

@@ -17,7 +17,6 @@ from .swarm import (
     check_population,
     check_velocity_update,
     evaluate,
-    uniforms,
     update_bests,
 )
 
@@ -45,18 +44,17 @@ class LDWPSO(AbstractSwarm):
         check_population(self.n_particles, "n_particles")
         check_velocity_update(self.c1, self.c2, self.vmax_fraction)
 
-    def step(self, fitness, s, t, iterations, lower, upper, keys):
+    def step(self, fitness, s, t, iterations, lower, upper, draws):
         w = self.w_start - (self.w_start - self.w_end) * t / max(iterations - 1, 1)
-        r1, r2 = uniforms(keys, s.x.shape, s.x.dtype)
+        r1, r2 = draws
         vmax = self.vmax_fraction * (upper - lower)
         v = w * s.v + self.c1 * r1 * (s.pbest_x - s.x) + self.c2 * r2 * (s.guide_x - s.x)
         v = jnp.clip(v, -vmax, vmax)
         x = jnp.clip(s.x + v, lower, upper)
-        ex = fitness.embed(x)
-        f, bad = evaluate(fitness, ex, s.active)
-        s = eqx.tree_at(lambda s: (s.v, s.n_evaluations, s.n_nonfinite), s,
+        f, bad = evaluate(fitness, x, s.active)
+        s = eqx.tree_at(lambda s: (s.v, s.n_evaluations, s.slot_nonfinite), s,
                         (v,
                          s.n_evaluations + jnp.sum(s.active, dtype=jnp.int32),
-                         s.n_nonfinite + bad))
-        s, (gx, gf) = update_bests(s, x, ex, f)
+                         s.slot_nonfinite + bad))
+        s, (gx, gf) = update_bests(s, x, f)
         return eqx.tree_at(lambda s: (s.guide_x, s.guide_f), s, (gx, gf))

@@ -24,6 +24,7 @@ import warnings
 import numpy as np
 import scipy.linalg
 import scipy.optimize
+import scipy.sparse
 
 #: Relative diagonal of the pivoted QR (unit-norm columns) below which a column counts as
 #: linearly dependent on the others.
@@ -162,3 +163,29 @@ def l1_solve(W, b) -> tuple[np.ndarray, int]:
     except np.linalg.LinAlgError:  # singular vertex: keep HiGHS's point
         pass
     return z / scale, int(res.nit)
+
+
+def l1_solve_box(W, b, lower, upper) -> tuple[np.ndarray, int]:
+    """``(argmin_{lower <= x <= upper} ||W x - b||_1, HiGHS iterations)``: the exact
+    least-absolute-deviation fit inside a box, the best a swarm searching that box can
+    reach. The unconstrained optimum (:func:`l1_solve`) when it lies in the box; otherwise
+    the primal LP ``min sum t  s.t.  -t <= W x - b <= t,  lower <= x <= upper`` (on
+    unit-norm columns, sparse, HiGHS). Raises ``RuntimeError`` if the LP fails."""
+    W, b = np.asarray(W, float), np.asarray(b, float)
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    x, nit = l1_solve(W, b)
+    if np.all(x >= lower) and np.all(x <= upper):
+        return x, nit
+    m, d = W.shape
+    scale = _scale(np.linalg.norm(W, axis=0))
+    Ws = scipy.sparse.csr_matrix(W / scale)
+    eye = scipy.sparse.identity(m, format="csr")
+    A = scipy.sparse.vstack([scipy.sparse.hstack([Ws, -eye]), scipy.sparse.hstack([-Ws, -eye])])
+    c = np.concatenate([np.zeros(d), np.ones(m)])
+    bounds = np.concatenate([np.stack([lower * scale, upper * scale], axis=1),
+                             np.tile([0.0, np.inf], (m, 1))])
+    res = scipy.optimize.linprog(c, A_ub=A.tocsc(), b_ub=np.concatenate([b, -b]),
+                                 bounds=bounds, method="highs")
+    if res.status != 0:
+        raise RuntimeError(f"l1_solve_box: the LP failed (status {res.status}): {res.message}")
+    return np.clip(res.x[:d] / scale, lower, upper), int(nit + res.nit)

@@ -98,9 +98,14 @@ class SEDSABSO(BeetleSwarm):
                 or self.n_phases < 1):
             raise ValueError(f"n_phases must be an integer >= 1, got {self.n_phases!r}")
 
+    def evaluations(self, n_active):
+        """BSO's three per beetle and the ``q`` annealing candidates (Eq. 14)."""
+        return 3 * n_active + self.n_trials
+
     def init(self, fitness, lower, upper, key):
         return initial_state(fitness, lower, upper, key, self.n_slots,
-                             self.vmax_fraction * (upper - lower), self.temperature)
+                             self.vmax_fraction * (upper - lower), self.temperature,
+                             antenna=self.antenna)
 
     def randomness(self, key, dim, dtype):
         """Keys for BSO's ``r1, r2`` (Eq. 11); Eq. 14's ``r`` (q x dim) and the q Metropolis
@@ -111,9 +116,15 @@ class SEDSABSO(BeetleSwarm):
         return (jax.random.split(sub), r,
                 uniforms(jax.random.split(ku, self.n_trials), (), dtype))
 
-    def step(self, fitness, s, t, iterations, lower, upper, keys):
-        k12, r, u = keys
-        r1, r2 = uniforms(k12, s.x.shape, s.x.dtype)
+    def draw(self, randomness, shape, dtype):
+        """``(r1 and r2 stacked, r, u)``: BSO's draws of Eq. 11 from their keys, and Eq.
+        14's ``r`` and the Metropolis uniforms as drawn up front."""
+        k12, r, u = randomness
+        return uniforms(k12, shape, dtype), r, u
+
+    def step(self, fitness, s, t, iterations, lower, upper, draws):
+        r12, r, u = draws
+        r1, r2 = r12[0], r12[1]
         s, (gx, gf) = self.beetle_step(fitness, s, lower, upper, r1, r2)
         swarm_better = gf < s.guide_f
         guide_x = jnp.where(swarm_better, gx, s.guide_x)
@@ -122,7 +133,7 @@ class SEDSABSO(BeetleSwarm):
             return eqx.tree_at(lambda s: (s.guide_x, s.guide_f, s.temperature), s,
                                (guide_x, guide_f, s.temperature * self.decay))
         cand = jnp.clip(gx * (1.0 + self.perturbation_scale * r), lower, upper)  # Eq. 14
-        fc, bad = evaluate(fitness, fitness.embed(cand))
+        fc, bad = evaluate(fitness, cand)
         # Metropolis against the current guide, the q trials in turn (q is small: unrolled)
         chosen, accepted = jnp.int32(-1), s.sa_accepted
         for k in range(self.n_trials):
@@ -134,7 +145,7 @@ class SEDSABSO(BeetleSwarm):
         i = jnp.argmin(fc)
         better = fc[i] < s.best_f
         bx, bf = jnp.where(better, cand[i], s.best_x), jnp.where(better, fc[i], s.best_f)
-        bad = s.n_nonfinite + bad
+        bad = s.n_nonfinite + jnp.sum(bad, dtype=jnp.int32)
         return eqx.tree_at(
             lambda s: (s.guide_x, s.guide_f, s.best_x, s.best_f, s.sa_accepted, s.n_nonfinite,
                        s.n_evaluations, s.temperature),

@@ -12,6 +12,7 @@ everything compiles once.
 from __future__ import annotations
 
 import abc
+import math
 
 import equinox as eqx
 import jax
@@ -57,10 +58,26 @@ class AbstractSwarm(eqx.Module):
         Default: two keys, for ``r1`` and ``r2`` of the velocity update."""
         return jax.random.split(key)
 
+    def draw(self, randomness, shape, dtype):
+        """One iteration's draws for a population of ``shape`` (slots, d), from what
+        :meth:`randomness` returned: what :meth:`step` takes. Default: ``(r1, r2)``,
+        uniform, one per slot and dimension."""
+        return uniforms(randomness, shape, dtype)
+
+    def evaluations(self, n_active):
+        """Fitness evaluations one iteration makes with ``n_active`` members (a member's
+        position counts once). Default: one per member."""
+        return n_active
+
+    def evaluation_counts(self, iterations: int, dim: int) -> np.ndarray:
+        """Cumulative fitness evaluations after each iteration, the initial population
+        included (what :attr:`~.result.Result.n_evaluations` reports at the end)."""
+        return self.n_slots + np.cumsum(self.evaluations(self.schedule(iterations)))
+
     @abc.abstractmethod
     def step(self, fitness, state: SwarmState, t, iterations: int, lower, upper,
-             keys) -> SwarmState:
-        """Iteration ``t`` of ``iterations``; ``keys`` as returned by :meth:`randomness`."""
+             draws) -> SwarmState:
+        """Iteration ``t`` of ``iterations``; ``draws`` as returned by :meth:`draw`."""
 
     @abc.abstractmethod
     def check(self) -> None:
@@ -68,17 +85,21 @@ class AbstractSwarm(eqx.Module):
 
 
 class SwarmState(eqx.Module):
-    """One run's population. Inactive slots still move (masking them would copy the
-    large embedding arrays every iteration) but their personal bests are frozen and they
-    never return: only active slots' personal bests can become the best."""
+    """One run's population. Inactive slots still move (masking them would cost more
+    than moving them) but their personal bests are frozen and they never return: only
+    active slots' personal bests can become the best. Nothing of the fitness's size is
+    carried from one iteration to the next: a beetle's antenna difference (Eq. 12) at
+    its current position is computed with that position's fitness, in the same pass,
+    and carried as one number per slot."""
 
     x: Float[Array, "slots d"]
     v: Float[Array, "slots d"]
-    ex: Float[Array, "slots m"]  # embed(x): W x for Eq. 17, x for a black box
-    ev: Float[Array, "slots m"]  # embed(v), used by the beetles' antennae
+    antennae: Float[Array, " slots"]  # f(x + a v) - f(x - a v) (beetles; 0 otherwise)
+    antennae_bad: Int[Array, " slots"]  # how many of those two were NaN or Inf
     pbest_x: Float[Array, "slots d"]
     pbest_f: Float[Array, " slots"]
     active: Bool[Array, " slots"]
+    slot_nonfinite: Int[Array, " slots"]  # non-finite evaluations of each active slot
     guide_x: Float[Array, " d"]  # global best that steers the velocities (SA guide)
     guide_f: Float[Array, ""]
     best_x: Float[Array, " d"]  # best point ever evaluated: what is reported
@@ -86,35 +107,50 @@ class SwarmState(eqx.Module):
     temperature: Float[Array, ""]
     sa_accepted: Int[Array, ""]
     n_evaluations: Int[Array, ""]
-    n_nonfinite: Int[Array, ""]
+    n_nonfinite: Int[Array, ""]  # non-finite evaluations not in slot_nonfinite
+
+    @property
+    def nonfinite_total(self):
+        """Every non-finite evaluation so far (counted per slot inside the loop, where a
+        sum per iteration would cost a reduction; summed here)."""
+        return self.n_nonfinite + jnp.sum(self.slot_nonfinite, dtype=jnp.int32)
 
 
-def evaluate(fitness, e, mask=None):
-    """Fitness from embeddings, non-finite values mapped to +Inf and counted."""
-    raw = fitness.value(e)
+def evaluate(fitness, X, mask=None, raw=None):
+    """Fitness of the members ``X`` (or their ``raw`` values when already computed),
+    non-finite values mapped to +Inf, and per member 1 where a value was non-finite
+    (0 outside ``mask`` when given)."""
+    raw = fitness.evaluate(X) if raw is None else raw
     bad = ~jnp.isfinite(raw)
     if mask is not None:
         bad = bad & mask
-    return finite_or_inf(raw), jnp.sum(bad, dtype=jnp.int32)
+    return finite_or_inf(raw), bad.astype(jnp.int32)
 
 
-def initial_state(fitness, lower, upper, key, slots: int, vmax, temperature=0.0) -> SwarmState:
+def initial_state(fitness, lower, upper, key, slots: int, vmax, temperature=0.0,
+                  antenna=None) -> SwarmState:
+    """Positions uniform in the box, velocities uniform in ``+-vmax``, evaluated; with
+    ``antenna`` (the beetles' ``a``), also each slot's ``f(x + a v) - f(x - a v)``."""
     kx, kv = jax.random.split(key)
     d = lower.shape[0]
     x = lower + (upper - lower) * jax.random.uniform(kx, (slots, d), lower.dtype)
     v = vmax * jax.random.uniform(kv, (slots, d), lower.dtype, -1.0, 1.0)
-    ex, ev = fitness.embed(x), fitness.embed(v)
-    f, bad = evaluate(fitness, ex)
+    if antenna is None:
+        raw, diff, diff_bad = None, jnp.zeros(slots, x.dtype), jnp.zeros(slots, jnp.int32)
+    else:
+        raw, diff, diff_bad = fitness.evaluate_with_antennae(x, v, antenna)
+    f, bad = evaluate(fitness, x, raw=raw)
     i = jnp.argmin(f)
     return SwarmState(
-        x=x, v=v, ex=ex, ev=ev, pbest_x=x, pbest_f=f,
-        active=jnp.ones(slots, bool), guide_x=x[i], guide_f=f[i], best_x=x[i], best_f=f[i],
+        x=x, v=v, antennae=diff, antennae_bad=diff_bad, pbest_x=x, pbest_f=f,
+        active=jnp.ones(slots, bool), slot_nonfinite=jnp.zeros(slots, jnp.int32),
+        guide_x=x[i], guide_f=f[i], best_x=x[i], best_f=f[i],
         temperature=jnp.asarray(temperature, lower.dtype), sa_accepted=jnp.int32(0),
-        n_evaluations=jnp.int32(slots), n_nonfinite=bad,
+        n_evaluations=jnp.int32(slots), n_nonfinite=jnp.sum(bad, dtype=jnp.int32),
     )
 
 
-def update_bests(state: SwarmState, x, ex, f):
+def update_bests(state: SwarmState, x, f):
     """Take the new positions; update the active slots' personal bests and the best ever.
     Returns the state and the swarm's global best ``(x, f)`` among the active slots."""
     better = state.active & (f < state.pbest_f)
@@ -124,9 +160,9 @@ def update_bests(state: SwarmState, x, ex, f):
     i = jnp.argmin(masked)
     improve_best = masked[i] < state.best_f
     return eqx.tree_at(
-        lambda s: (s.x, s.ex, s.pbest_x, s.pbest_f, s.best_x, s.best_f),
+        lambda s: (s.x, s.pbest_x, s.pbest_f, s.best_x, s.best_f),
         state,
-        (x, ex, pbest_x, pbest_f,
+        (x, pbest_x, pbest_f,
          jnp.where(improve_best, pbest_x[i], state.best_x),
          jnp.where(improve_best, masked[i], state.best_f)),
     ), (pbest_x[i], masked[i])
@@ -140,9 +176,12 @@ def set_active(state: SwarmState, n_active) -> SwarmState:
 
 
 def shrink(state: SwarmState, slots: int) -> SwarmState:
-    """Reorder slots best first (active before inactive) and keep the first ``slots``."""
+    """Reorder slots best first (active before inactive) and keep the first ``slots``
+    (the per-slot non-finite counts move to the total first)."""
     order = jnp.argsort(jnp.where(state.active, state.pbest_f, jnp.inf))[:slots]
-    per_slot = ("x", "v", "ex", "ev", "pbest_x", "pbest_f", "active")
+    per_slot = ("x", "v", "antennae", "antennae_bad", "pbest_x", "pbest_f", "active")
+    state = eqx.tree_at(lambda s: (s.n_nonfinite, s.slot_nonfinite), state,
+                        (state.nonfinite_total, jnp.zeros(slots, jnp.int32)))
     return eqx.tree_at(lambda s: [getattr(s, k) for k in per_slot], state,
                        [getattr(state, k)[order] for k in per_slot])
 
@@ -156,9 +195,50 @@ def phases(schedule: np.ndarray, n_phases: int):
 
 
 def uniforms(keys, shape, dtype):
-    """``jax.random.uniform(k, shape)`` for each key of ``keys`` in one batched call (the
-    same numbers as one call per key)."""
-    return jax.vmap(lambda k: jax.random.uniform(k, shape, dtype))(keys)
+    """``jax.random.uniform(k, shape, dtype)`` for each key of ``keys`` in one batched
+    call, bit for bit (``tests/test_swarms.py`` checks it).
+
+    For threefry keys (JAX's default, with ``jax_threefry_partitionable``, the default
+    since JAX 0.5) the bits come from :func:`_threefry2x32`, the same hash written out
+    round by round: XLA fuses it into one elementwise loop, where JAX's own CPU lowering
+    runs it as a 5-trip loop (an iteration's r1, r2 for 50 x 21: 5.7 vs 10.9 us on the
+    2-core AMD EPYC, ``python benchmarks/kernels.py``). Other keys go through
+    ``jax.random.uniform``."""
+    n = math.prod(shape)
+    if not (jnp.issubdtype(keys.dtype, jax.dtypes.prng_key)
+            and str(jax.random.key_impl(keys)) == "threefry2x32"
+            and jax.config.jax_threefry_partitionable and n < 2**32):
+        return jax.vmap(lambda k: jax.random.uniform(k, shape, dtype))(keys)
+    dtype = jnp.dtype(dtype)
+    kd = jax.random.key_data(keys)  # (..., 2) uint32
+    lo = jax.lax.iota(np.uint32, n).reshape(shape)  # the flat index as (hi, lo) words
+    k1, k2 = (kd[..., i].reshape(kd.shape[:-1] + (1,) * len(shape)) for i in (0, 1))
+    b1, b2 = _threefry2x32(k1, k2, jnp.zeros_like(lo), lo)
+    nbits, nmant = jnp.finfo(dtype).bits, jnp.finfo(dtype).nmant
+    if nbits == 64:
+        uint = np.uint64
+        bits = (b1.astype(uint) << uint(32)) | b2.astype(uint)
+    else:
+        uint = np.uint32
+        bits = b1 ^ b2
+    one = np.array(1.0, dtype).view(uint)
+    float_bits = jax.lax.shift_right_logical(bits, uint(nbits - nmant)) | one
+    return jax.lax.bitcast_convert_type(float_bits, dtype) - jnp.asarray(1.0, dtype)
+
+
+def _threefry2x32(k1, k2, x1, x2):
+    """Threefry-2x32 with 20 rounds (Salmon et al., "Parallel random numbers: as easy as
+    1, 2, 3", SC 2011), as JAX computes it: key schedule ``k1, k2, k1 ^ k2 ^
+    0x1BD11BDA``, rotations 13 15 26 6 / 17 29 16 24, a key injection every 4 rounds."""
+    ks = (k1, k2, k1 ^ k2 ^ np.uint32(0x1BD11BDA))
+    x1, x2 = x1 + ks[0], x2 + ks[1]
+    for i in range(5):
+        for r in ((13, 15, 26, 6), (17, 29, 16, 24))[i % 2]:
+            x1 = x1 + x2
+            x2 = x1 ^ ((x2 << np.uint32(r)) | jax.lax.shift_right_logical(x2, np.uint32(32 - r)))
+        x1 = x1 + ks[(i + 1) % 3]
+        x2 = x2 + ks[(i + 2) % 3] + np.uint32(i + 1)
+    return x1, x2
 
 
 def check_population(n, name: str) -> None:

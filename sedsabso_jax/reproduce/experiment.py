@@ -119,6 +119,52 @@ class Experiment:
     l1_floor: float
 
 
+@dataclasses.dataclass
+class IdentificationProblem:
+    """The experiment's problem: Eq. 17 on the simulated data, the scenario's box."""
+
+    robot: object
+    base: object
+    true: np.ndarray  # the true base parameters
+    design: object  # the excitation design (Eq. 9)
+    data: object  # the simulated measurements
+    problem: L1Residual
+    prior: np.ndarray | None
+    lower: np.ndarray
+    upper: np.ndarray
+
+
+def build_problem(settings: Settings = Settings(),
+                  progress: Callable[[str], None] | None = None) -> IdentificationProblem:
+    """Steps 1-3 of the module docstring and the scenario's box: the problem the swarms
+    solve (also one of ``sedsabso-jax compare``'s identification problems).
+    ``progress(label)`` is called before each step."""
+    settings.check()
+    progress = progress or (lambda label: None)
+    key = jax.random.key(settings.seed)
+    progress("base parameters")
+    robot = robots.rs010n()
+    base = base_parameters(robot)
+    true = np.asarray(base.values, dtype=float)
+
+    progress("excitation design (Eq. 9)")
+    design_kw = {} if settings.design_iterations is None else {
+        "iterations": settings.design_iterations}
+    design = design_excitation(robot, JointLimits.rs010n(), duration=DURATION,
+                               rate=settings.samples / DURATION,
+                               key=jax.random.fold_in(key, 0), base=base, **design_kw)
+    times = np.asarray(design.times, dtype=float)[: settings.samples]
+
+    progress("simulated measurements")
+    q, qd, qdd = (np.asarray(a, dtype=float) for a in design.trajectory(times))
+    data = simulate_measurements(robot, q, qd, qdd, times, torque_noise=settings.noise,
+                                 seed=settings.seed)
+    problem = L1Residual.from_base(base, data.q, data.qd, data.qdd, data.tau)
+    prior, lower, upper = scenario_box(true, settings.scenario, settings.seed)
+    return IdentificationProblem(robot, base, true, design, data, problem, prior, lower,
+                                 upper)
+
+
 def _progress_noop(label: str, done: int, total: int) -> None:
     pass
 
@@ -133,25 +179,9 @@ def run(settings: Settings = Settings(), progress: Callable[[str, int, int], Non
     dtype = jnp.float32 if settings.dtype == "float32" else jnp.float64
     key = jax.random.key(settings.seed)
 
-    progress("base parameters", next(step), total)
-    robot = robots.rs010n()
-    base = base_parameters(robot)
-    true = np.asarray(base.values, dtype=float)
-
-    progress("excitation design (Eq. 9)", next(step), total)
-    design_kw = {} if settings.design_iterations is None else {
-        "iterations": settings.design_iterations}
-    design = design_excitation(robot, JointLimits.rs010n(), duration=DURATION,
-                               rate=settings.samples / DURATION,
-                               key=jax.random.fold_in(key, 0), base=base, **design_kw)
-    times = np.asarray(design.times, dtype=float)[: settings.samples]
-
-    progress("simulated measurements", next(step), total)
-    q, qd, qdd = (np.asarray(a, dtype=float) for a in design.trajectory(times))
-    data = simulate_measurements(robot, q, qd, qdd, times, torque_noise=settings.noise,
-                                 seed=settings.seed)
-    problem = L1Residual.from_base(base, data.q, data.qd, data.qdd, data.tau)
-    prior, lower, upper = scenario_box(true, settings.scenario, settings.seed)
+    p = build_problem(settings, lambda label: progress(label, next(step), total))
+    robot, base, true, design, data = p.robot, p.base, p.true, p.design, p.data
+    problem, prior, lower, upper = p.problem, p.prior, p.lower, p.upper
 
     algorithms, history_f, history_n, phase_slots = {}, {}, {}, {}
     for i, name in enumerate(SWARMS, start=1):

@@ -1,0 +1,134 @@
+"""Micro-benchmarks behind the swarms' kernel choices on the CPU (each a ``lax.scan`` of
+the kernel alone, compiled, then timed fastest of ``--repeats``; microseconds per
+iteration; RS010N's Eq. 17 sizes: 21 base parameters, 3000 residual rows):
+
+- the product ``X W^T`` with ``W`` stored ``(m, d)`` or transposed ``(d, m)`` (3 rows:
+  SEDSABSO's annealing candidates; 50 rows: a population);
+- BSO's evaluation (``W x``, ``W v`` and one pass summing ``|r|`` and
+  ``|r + a g| - |r - a g|``, :meth:`~sedsabso_jax.L1Residual.evaluate_with_antennae`)
+  on all 3000 rows at once, with x and v stacked in one product, and in blocks of
+  ``c`` rows (:meth:`~sedsabso_jax.L1Residual.blocked`);
+- one iteration's draws ``r1, r2`` (2 x 50 x 21) from JAX's ``jax.random.uniform`` (a
+  5-trip loop on the CPU) and from the package's written-out threefry
+  (:func:`~sedsabso_jax.optim.swarm.uniforms`), both bit for bit the same numbers.
+
+    python benchmarks/kernels.py [--repeats 9] [--json out.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from device import describe, device_info
+
+import sedsabso_jax as sj  # noqa: F401  (float64 on)
+from sedsabso_jax.optim.fitness import _antenna_terms, _matmul, _row_sum
+from sedsabso_jax.optim.swarm import uniforms
+
+M, D, LENGTH = 3000, 21, 300
+
+
+def timed(fn, args, repeats):
+    """Microseconds per iteration of ``fn`` (a whole scan), fastest of ``repeats``."""
+    exe = jax.jit(fn).lower(*args).compile()
+    jax.block_until_ready(exe(*args))
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        jax.block_until_ready(exe(*args))
+        best = min(best, time.perf_counter() - t0)
+    return best / LENGTH * 1e6
+
+
+def loop(kernel):
+    """A scan of ``kernel(X, V, *data) -> (f, g)`` whose output feeds the next X, V."""
+    def run(X, V, *data):
+        def body(c, _):
+            X, V = c
+            f, g = kernel(X, V, *data)
+            return (X * 0.999 + 1e-12 * f[:, None], V * 0.999 + 1e-12 * g[:, None]), None
+        return jax.lax.scan(body, (X, V), None, length=LENGTH)[0]
+    return run
+
+
+def bso_pass(X, V, WT, tau, a=0.0125):
+    R = _matmul(X, WT) - tau
+    return _row_sum(jnp.abs(R)), _row_sum(_antenna_terms(R, _matmul(V, WT), a))
+
+
+def bso_stacked(X, V, WT, tau, a=0.0125):
+    n = X.shape[0]
+    EG = _matmul(jnp.concatenate([X, V]), WT)
+    R = EG[:n] - tau
+    return _row_sum(jnp.abs(R)), _row_sum(_antenna_terms(R, EG[n:], a))
+
+
+def bso_blocks(X, V, WTb, taub, a=0.0125):
+    def body(acc, blk):
+        f, g = bso_pass(X, V, *blk, a)
+        return (acc[0] + f, acc[1] + g), None
+    zero = jnp.zeros(X.shape[0], X.dtype)
+    return jax.lax.scan(body, (zero, zero), (WTb, taub))[0]
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--repeats", type=int, default=9)
+    parser.add_argument("--json", default=None)
+    args = parser.parse_args()
+    rng = np.random.default_rng(0)
+    info = device_info()
+    rows = []
+
+    def row(what, dtype, us):
+        rows.append({"kernel": what, "dtype": jnp.dtype(dtype).name, "us_per_iteration": us})
+        print(f"{what:52s} {jnp.dtype(dtype).name:7s} {us:8.1f} us", flush=True)
+
+    print(f"device: {describe(info)}, jax {info['jax']}; {LENGTH} iterations per loop, "
+          f"fastest of {args.repeats}")
+    W0, tau0 = rng.standard_normal((M, D)), rng.standard_normal(M)
+    for dtype in (jnp.float64, jnp.float32):
+        W, WT = jnp.asarray(W0, dtype), jnp.asarray(np.ascontiguousarray(W0.T), dtype)
+        tau = jnp.asarray(tau0, dtype)
+        for n in (3, 50):
+            X, V = (jnp.asarray(rng.standard_normal((n, D)), dtype) for _ in range(2))
+            row(f"X W^T, {n} rows, W stored (m, d)", dtype,
+                timed(loop(lambda X, V, W: (X @ W.T)[:, :2].T), (X, V, W), args.repeats))
+            row(f"X W^T, {n} rows, W^T stored (d, m)", dtype,
+                timed(loop(lambda X, V, WT: _matmul(X, WT)[:, :2].T), (X, V, WT),
+                      args.repeats))
+        X, V = (jnp.asarray(rng.standard_normal((50, D)), dtype) for _ in range(2))
+        row("BSO evaluation, 50 rows: 3000 at once", dtype,
+            timed(loop(bso_pass), (X, V, WT, tau), args.repeats))
+        row("BSO evaluation, 50 rows: 3000 at once, x v stacked", dtype,
+            timed(loop(bso_stacked), (X, V, WT, tau), args.repeats))
+        for c in (1500, 750, 600, 500, 375, 300, 200, 150):
+            k = M // c
+            WTb = jnp.asarray(np.ascontiguousarray(W0.T.reshape(D, k, c).transpose(1, 0, 2)),
+                              dtype)
+            taub = jnp.asarray(tau0.reshape(k, c), dtype)
+            kib = 50 * c * jnp.dtype(dtype).itemsize // 1024
+            row(f"BSO evaluation, 50 rows: blocks of {c} ({kib} KiB)", dtype,
+                timed(loop(bso_blocks), (X, V, WTb, taub), args.repeats))
+        keys = jax.random.split(jax.random.key(0), 2 * LENGTH).reshape(LENGTH, 2)
+        draw_jax = jax.vmap(lambda k: jax.vmap(lambda k1: jax.random.uniform(
+            k1, (50, D), dtype))(k))
+        draw_ours = jax.vmap(lambda k: uniforms(k, (50, D), dtype))
+        assert np.array_equal(np.asarray(draw_jax(keys)), np.asarray(draw_ours(keys)))
+        row("r1, r2 (2 x 50 x 21): jax.random.uniform", dtype,
+            timed(draw_jax, (keys,), args.repeats))
+        row("r1, r2 (2 x 50 x 21): threefry written out", dtype,
+            timed(draw_ours, (keys,), args.repeats))
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump({"device": info, "iterations_per_loop": LENGTH, "rows": rows}, fh,
+                      indent=2)
+
+
+if __name__ == "__main__":
+    main()
