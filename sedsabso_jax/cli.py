@@ -115,6 +115,12 @@ def _cmd_compare(args) -> None:
                                 runs=args.runs, budget=args.budget, seed=args.seed,
                                 instances=args.instances, dimensions=dims, dtype=args.dtype)
     settings.check()
+    if settings.suite != "identification":
+        try:
+            import evosax  # noqa: F401  (BBOB's functions)
+        except ImportError:
+            raise ValueError("the BBOB suite needs evosax: pip install 'sedsabso-jax[compare]' "
+                             "(or use --suite identification)") from None
     _check_writable(args.out, None)
     t0 = time.perf_counter()
     docs = compare.compare(settings, args.out, progress=_CompareProgress())
