@@ -1,6 +1,7 @@
 """Micro-benchmarks behind the swarms' kernel choices on the CPU (each a ``lax.scan`` of
-the kernel alone, compiled, then timed fastest of ``--repeats``; microseconds per
-iteration; RS010N's Eq. 17 sizes: 21 base parameters, 3000 residual rows):
+the kernel alone; all compiled first, then run in turn ``--repeats`` times, so that the
+shared machine's slow spells hit all alike; fastest run, microseconds per iteration;
+RS010N's Eq. 17 sizes: 21 base parameters, 3000 residual rows):
 
 - the product ``X W^T`` with ``W`` stored ``(m, d)`` or transposed ``(d, m)`` (3 rows:
   SEDSABSO's annealing candidates; 50 rows: a population);
@@ -34,15 +35,15 @@ M, D, LENGTH = 3000, 21, 300
 
 
 def timed(fn, args, repeats):
-    """Microseconds per iteration of ``fn`` (a whole scan), fastest of ``repeats``."""
+    """A callable timing one run of ``fn`` (a whole scan), compiled and warmed up here."""
     exe = jax.jit(fn).lower(*args).compile()
     jax.block_until_ready(exe(*args))
-    best = np.inf
-    for _ in range(repeats):
+
+    def once():
         t0 = time.perf_counter()
         jax.block_until_ready(exe(*args))
-        best = min(best, time.perf_counter() - t0)
-    return best / LENGTH * 1e6
+        return time.perf_counter() - t0
+    return once
 
 
 def loop(kernel):
@@ -83,11 +84,10 @@ def main():
     args = parser.parse_args()
     rng = np.random.default_rng(0)
     info = device_info()
-    rows = []
+    cases = []
 
-    def row(what, dtype, us):
-        rows.append({"kernel": what, "dtype": jnp.dtype(dtype).name, "us_per_iteration": us})
-        print(f"{what:52s} {jnp.dtype(dtype).name:7s} {us:8.1f} us", flush=True)
+    def row(what, dtype, once):
+        cases.append((what, jnp.dtype(dtype).name, once))
 
     print(f"device: {describe(info)}, jax {info['jax']}; {LENGTH} iterations per loop, "
           f"fastest of {args.repeats}")
@@ -124,6 +124,16 @@ def main():
             timed(draw_jax, (keys,), args.repeats))
         row("r1, r2 (2 x 50 x 21): threefry written out", dtype,
             timed(draw_ours, (keys,), args.repeats))
+    times = [[] for _ in cases]
+    for _ in range(args.repeats):
+        for t, (_, _, once) in zip(times, cases):
+            t.append(once())
+    rows = []
+    for t, (what, dtype, _) in zip(times, cases):
+        us = min(t) / LENGTH * 1e6
+        rows.append({"kernel": what, "dtype": dtype, "us_per_iteration": us,
+                     "us_median": float(np.median(t)) / LENGTH * 1e6})
+        print(f"{what:52s} {dtype:7s} {us:8.1f} us (median {rows[-1]['us_median']:.1f})")
     if args.json:
         with open(args.json, "w") as fh:
             json.dump({"device": info, "iterations_per_loop": LENGTH, "rows": rows}, fh,
