@@ -3,17 +3,22 @@ the kernel alone; all compiled first, then run in turn ``--repeats`` times, so t
 shared machine's slow spells hit all alike; fastest run, microseconds per iteration;
 RS010N's Eq. 17 sizes: 21 base parameters, 3000 residual rows):
 
-- the product ``X W^T`` with ``W`` stored ``(m, d)`` or transposed ``(d, m)`` (3 rows:
-  SEDSABSO's annealing candidates; 50 rows: a population);
-- BSO's evaluation (``W x``, ``W v`` and one pass summing ``|r|`` and
-  ``|r + a g| - |r - a g|``, :meth:`~sedsabso_jax.L1Residual.evaluate_with_antennae`)
-  on all 3000 rows at once, with x and v stacked in one product, and in blocks of
-  ``c`` rows (:meth:`~sedsabso_jax.L1Residual.blocked`);
+- the product ``X W^T`` with ``W`` an argument stored ``(m, d)`` or transposed ``(d, m)``,
+  or a constant of the compiled code (3 rows: SEDSABSO's annealing candidates; 50 rows:
+  a population);
+- Eq. 17 for 50 members: the product then ``|r|`` summed by a product with ones, or by a
+  reduction that XLA fuses with the product (:meth:`~sedsabso_jax.L1Residual.evaluate`);
+- BSO's evaluation (``f(x)`` and ``f(x + a v) - f(x - a v)`` from ``|r + a g| - |r - a
+  g|``, :meth:`~sedsabso_jax.L1Residual.evaluate_with_antennae`): ``|r|`` and the
+  antenna terms from one pass over ``r = W x - tau``, or ``f`` fused on its own;
 - one iteration's draws ``r1, r2`` (2 x 50 x 21) from JAX's ``jax.random.uniform`` (a
   5-trip loop on the CPU) and from the package's written-out threefry
   (:func:`~sedsabso_jax.optim.swarm.uniforms`), both bit for bit the same numbers.
 
-    python benchmarks/kernels.py [--repeats 9] [--json out.json]
+    python benchmarks/kernels.py [--repeats 15] [--json out.json]
+
+The machine is shared and its state changes the picture: products parallelise over both
+cores when the machine is quiet; compare rows of one run only.
 """
 
 from __future__ import annotations
@@ -28,7 +33,7 @@ import numpy as np
 from device import describe, device_info
 
 import sedsabso_jax as sj  # noqa: F401  (float64 on)
-from sedsabso_jax.optim.fitness import _antenna_terms, _matmul, _row_sum
+from sedsabso_jax.optim.fitness import _antenna_terms, _matmul
 from sedsabso_jax.optim.swarm import uniforms
 
 M, D, LENGTH = 3000, 21, 300
@@ -57,29 +62,23 @@ def loop(kernel):
     return run
 
 
-def bso_pass(X, V, WT, tau, a=0.0125):
-    R = _matmul(X, WT) - tau
-    return _row_sum(jnp.abs(R)), _row_sum(_antenna_terms(R, _matmul(V, WT), a))
+def ones_sum(A):
+    return _matmul(A, jnp.ones(A.shape[-1], A.dtype))
 
 
-def bso_stacked(X, V, WT, tau, a=0.0125):
-    n = X.shape[0]
-    EG = _matmul(jnp.concatenate([X, V]), WT)
-    R = EG[:n] - tau
-    return _row_sum(jnp.abs(R)), _row_sum(_antenna_terms(R, EG[n:], a))
+def bso_one_pass(X, V, W, tau, a=0.0125):
+    R = _matmul(X, W.T) - tau
+    return ones_sum(jnp.abs(R)), ones_sum(_antenna_terms(R, _matmul(V, W.T), a))
 
 
-def bso_blocks(X, V, WTb, taub, a=0.0125):
-    def body(acc, blk):
-        f, g = bso_pass(X, V, *blk, a)
-        return (acc[0] + f, acc[1] + g), None
-    zero = jnp.zeros(X.shape[0], X.dtype)
-    return jax.lax.scan(body, (zero, zero), (WTb, taub))[0]
+def bso_f_fused(X, V, W, tau, a=0.0125):
+    f = jnp.sum(jnp.abs(_matmul(X, W.T) - tau), -1)
+    return f, ones_sum(_antenna_terms(_matmul(X, W.T) - tau, _matmul(V, W.T), a))
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--repeats", type=int, default=9)
+    parser.add_argument("--repeats", type=int, default=15)
     parser.add_argument("--json", default=None)
     args = parser.parse_args()
     rng = np.random.default_rng(0)
@@ -94,27 +93,31 @@ def main():
     W0, tau0 = rng.standard_normal((M, D)), rng.standard_normal(M)
     for dtype in (jnp.float64, jnp.float32):
         W, WT = jnp.asarray(W0, dtype), jnp.asarray(np.ascontiguousarray(W0.T), dtype)
-        tau = jnp.asarray(tau0, dtype)
+        Wc, tau = np.asarray(W0, jnp.dtype(dtype)), jnp.asarray(tau0, dtype)
         for n in (3, 50):
             X, V = (jnp.asarray(rng.standard_normal((n, D)), dtype) for _ in range(2))
-            row(f"X W^T, {n} rows, W stored (m, d)", dtype,
-                timed(loop(lambda X, V, W: (X @ W.T)[:, :2].T), (X, V, W), args.repeats))
-            row(f"X W^T, {n} rows, W^T stored (d, m)", dtype,
+            row(f"X W^T, {n} rows, W an argument (m, d)", dtype,
+                timed(loop(lambda X, V, W: (_matmul(X, W.T)[:, :2].T)), (X, V, W),
+                      args.repeats))
+            row(f"X W^T, {n} rows, W an argument (d, m)", dtype,
                 timed(loop(lambda X, V, WT: _matmul(X, WT)[:, :2].T), (X, V, WT),
                       args.repeats))
+            row(f"X W^T, {n} rows, W a constant", dtype,
+                timed(loop(lambda X, V: _matmul(X, Wc.T)[:, :2].T), (X, V), args.repeats))
         X, V = (jnp.asarray(rng.standard_normal((50, D)), dtype) for _ in range(2))
-        row("BSO evaluation, 50 rows: 3000 at once", dtype,
-            timed(loop(bso_pass), (X, V, WT, tau), args.repeats))
-        row("BSO evaluation, 50 rows: 3000 at once, x v stacked", dtype,
-            timed(loop(bso_stacked), (X, V, WT, tau), args.repeats))
-        for c in (1500, 750, 600, 500, 375, 300, 200, 150):
-            k = M // c
-            WTb = jnp.asarray(np.ascontiguousarray(W0.T.reshape(D, k, c).transpose(1, 0, 2)),
-                              dtype)
-            taub = jnp.asarray(tau0.reshape(k, c), dtype)
-            kib = 50 * c * jnp.dtype(dtype).itemsize // 1024
-            row(f"BSO evaluation, 50 rows: blocks of {c} ({kib} KiB)", dtype,
-                timed(loop(bso_blocks), (X, V, WTb, taub), args.repeats))
+        row("Eq. 17, 50 rows: product, |r| summed by ones", dtype,
+            timed(loop(lambda X, V, W, tau: (ones_sum(jnp.abs(_matmul(X, W.T) - tau)),) * 2),
+                  (X, V, W, tau), args.repeats))
+        row("Eq. 17, 50 rows: product and sum fused", dtype,
+            timed(loop(lambda X, V, W, tau: (jnp.sum(jnp.abs(_matmul(X, W.T) - tau), -1),) * 2),
+                  (X, V, W, tau), args.repeats))
+        row("Eq. 17, 50 rows: fused, W a constant", dtype,
+            timed(loop(lambda X, V, tau: (jnp.sum(jnp.abs(_matmul(X, Wc.T) - tau), -1),) * 2),
+                  (X, V, tau), args.repeats))
+        row("BSO evaluation, 50 rows: |r| and antennae, one pass", dtype,
+            timed(loop(bso_one_pass), (X, V, W, tau), args.repeats))
+        row("BSO evaluation, 50 rows: f fused, antennae a pass", dtype,
+            timed(loop(bso_f_fused), (X, V, W, tau), args.repeats))
         keys = jax.random.split(jax.random.key(0), 2 * LENGTH).reshape(LENGTH, 2)
         draw_jax = jax.vmap(lambda k: jax.vmap(lambda k1: jax.random.uniform(
             k1, (50, D), dtype))(k))

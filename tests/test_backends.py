@@ -1,8 +1,9 @@
 """What depends on the backend: batch and block sizes chosen per backend (the accelerator's
 choices tested here on the CPU by making ``jax.default_backend`` say "gpu"), memory
 budgets and the memory a batch of runs needs, full float32 precision in the products
-(``Precision.HIGHEST`` in the jaxprs), the swarms' lean kernels (random draws, Eq. 17 in
-blocks, pinned seeded runs) and the accelerator's code path giving the CPU's numbers."""
+(``Precision.HIGHEST`` in the jaxprs), the swarms' lean kernels (random draws, Eq. 17's
+evaluation paths, pinned seeded runs) and the accelerator's code path giving the CPU's
+numbers."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ import pytest
 
 import sedsabso_jax as sj
 from sedsabso_jax.optim import driver
-from sedsabso_jax.optim.fitness import L1Blocks
+from sedsabso_jax.optim import fitness as l1
 from sedsabso_jax.optim.swarm import uniforms
 
 # the modules (the packages re-export functions of the same names)
@@ -40,7 +41,7 @@ def gpu(monkeypatch):
 
 
 def l1_problem(m=1000, d=5, seed=7):
-    """Eq. 17 with m rows, large enough for blocks of the residuals on the CPU."""
+    """Eq. 17 with m rows."""
     rng = np.random.default_rng(seed)
     W = rng.standard_normal((m, d))
     true = rng.uniform(-1, 1, d)
@@ -152,19 +153,19 @@ def _precisions(fn, *args):
 
 @pytest.mark.parametrize("backend", ["cpu", "gpu"])
 def test_l1_products_ask_for_full_precision(monkeypatch, backend):
-    """Every product of Eq. 17 (embedding, row sums, blocks) asks for HIGHEST, so float32
-    is not computed with TF32 or bfloat16 passes on a GPU or TPU."""
+    """Every product of Eq. 17 (a population's, a few candidates', the row sums) asks for
+    HIGHEST, so float32 is not computed with TF32 or bfloat16 passes on a GPU or TPU."""
     monkeypatch.setattr(jax, "default_backend", lambda: backend)
     prob, _, _ = l1_problem()
+    assert (prob.W_constant is None) == (backend == "gpu")
     prob = jax.tree.map(lambda a: a.astype(jnp.float32), prob)
-    X = jnp.ones((60, 5), jnp.float32)
     highest = (jax.lax.Precision.HIGHEST, jax.lax.Precision.HIGHEST)
-    for fit in (prob, prob.blocked(20)):
-        for fn, args in ((fit.evaluate, (X,)),
-                         (lambda X, V: fit.evaluate_with_antennae(X, V, 0.1), (X, X))):
+    for rows in (3, 60):
+        X = jnp.ones((rows, 5), jnp.float32)
+        for fn, args in ((prob.evaluate, (X,)),
+                         (lambda X, V: prob.evaluate_with_antennae(X, V, 0.1), (X, X))):
             found = _precisions(fn, *args)
             assert found and all(p == highest for p in found), found
-    assert isinstance(prob.blocked(60), L1Blocks if backend == "cpu" else sj.L1Residual)
 
 
 def test_dynamics_and_trajectory_products_ask_for_full_precision():
@@ -195,22 +196,37 @@ def test_uniforms_are_jax_random_uniform_bit_for_bit(dtype):
                                   jax.vmap(lambda k: jax.random.uniform(k, (4,), dtype))(other))
 
 
-def test_blocks_of_eq_17_give_its_values():
-    """Eq. 17 in blocks of the residual rows (the last padded with zero rows) gives the
-    values of the whole at once, up to the order of the sums."""
-    prob, lo, hi = l1_problem(m=1003)
+@pytest.mark.parametrize("rows", [3, 20])
+def test_eq_17_paths_give_its_values(monkeypatch, rows):
+    """A few members (through W^T) and a population (fused product and sum, W a constant
+    of the compiled code or an argument) give Eq. 17 and the antenna differences."""
+    prob, lo, hi = l1_problem()
     rng = np.random.default_rng(1)
-    X, V = (jnp.asarray(rng.uniform(lo, hi, (20, 5))) for _ in range(2))
-    blocks = prob.blocked(20)
-    assert isinstance(blocks, L1Blocks) and blocks.WT_blocks.shape[0] == 2
-    np.testing.assert_allclose(blocks.evaluate(X), prob.evaluate(X), rtol=1e-13)
-    for got, want in zip(blocks.evaluate_with_antennae(X, V, 0.3),
-                         prob.evaluate_with_antennae(X, V, 0.3)):
-        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-9)
-    assert prob.blocked(2) is prob  # one block holds every row
+    X, V = (rng.uniform(lo, hi, (rows, 5)) for _ in range(2))
     W, tau = np.asarray(prob.W), np.asarray(prob.tau)
-    np.testing.assert_allclose(prob.evaluate(X), np.abs(np.asarray(X) @ W.T - tau).sum(1),
-                               rtol=1e-13)
+    f = lambda X: np.abs(X @ W.T - tau).sum(1)  # noqa: E731
+    monkeypatch.setattr(l1, "CONSTANT_BYTES", 0)
+    for p in (prob, sj.L1Residual(W, tau)):  # W a constant, then an argument
+        out = jax.jit(lambda X, V, p=p: (p.evaluate(X), *p.evaluate_with_antennae(X, V, 0.3)))(
+            jnp.asarray(X), jnp.asarray(V))
+        np.testing.assert_allclose(out[0], f(X), rtol=1e-13)
+        np.testing.assert_allclose(out[1], f(X), rtol=1e-13)
+        np.testing.assert_allclose(out[2], f(X + 0.3 * V) - f(X - 0.3 * V), rtol=1e-10,
+                                   atol=1e-9)
+        np.testing.assert_array_equal(out[3], 0)
+    assert prob.W_constant is not None and sj.L1Residual(W, tau).W_constant is None
+
+
+def test_a_constant_w_compiles_once_per_w():
+    """W kept as a constant of the compiled code is compared by content: the same W with
+    another tau reuses the compiled code; another W compiles anew."""
+    prob, lo, hi = l1_problem(m=200)
+    W, tau = np.asarray(prob.W), np.asarray(prob.tau)
+    kw = dict(key=jax.random.key(0), iterations=5)
+    solver = sj.LDWPSO(n_particles=11)
+    sj.minimise(prob, solver, lo, hi, **kw)
+    assert sj.minimise(sj.L1Residual(W, tau + 1.0), solver, lo, hi, **kw).compile_s == 0.0
+    assert sj.minimise(sj.L1Residual(2 * W, tau), solver, lo, hi, **kw).compile_s > 0.0
 
 
 PINNED_L1 = {
@@ -227,10 +243,10 @@ def _small(name):
 
 @pytest.mark.parametrize("name", PINNED_L1)
 def test_seeded_eq_17_runs_are_pinned(name):
-    """The lean kernels on Eq. 17 (blocks of the residuals, draws before each phase's
-    loop, antennae carried as one number per beetle): 2 runs of 40 iterations, key 42, as
-    measured on the project's 2-core AMD EPYC VM (jax 0.10.2). 1e-9 relative allows for
-    the order of floating-point sums on other CPUs."""
+    """The lean kernels on Eq. 17 (W a constant of the compiled code, draws before each
+    phase's loop, antennae carried as one number per beetle): 2 runs of 40 iterations,
+    key 42, as measured on the project's 2-core AMD EPYC VM (jax 0.10.2). 1e-9 relative
+    allows for the order of floating-point sums on other CPUs."""
     prob, lo, hi = l1_problem()
     f_runs, x00, n_eval = PINNED_L1[name]
     r = sj.minimise(prob, _small(name), lo, hi, key=jax.random.key(42), iterations=40, runs=2)

@@ -89,19 +89,18 @@ def _single_run(solver: AbstractSwarm, fitness, lower, upper, key, iterations: i
         before = np.concatenate([[min(sched[max(a - 1, 0)], slots)], sched[a:b - 1]])
         drops = sched[a:b] < before  # N(t) falls: re-rank, the worst leave
         shape = (slots, dim)
-        fit = fitness.blocked(slots * _IN_FLIGHT.get())  # the layout for them, made once
         phase_rand = jax.tree.map(lambda r, a=a, b=b: r[a:b], rand)
         predraw = _predraws(solver, phase_rand, shape, dtype, b - a)
         if predraw:
             phase_rand = jax.vmap(lambda r, shape=shape: solver.draw(r, shape, dtype))(
                 phase_rand)
 
-        def body(state, inp, predraw=predraw, shape=shape, rerank=bool(drops.any()), fit=fit):
+        def body(state, inp, predraw=predraw, shape=shape, rerank=bool(drops.any())):
             t, n_active, drop, r = inp
             if rerank:
                 state = _rerank(state, n_active, drop)
             draws = r if predraw else solver.draw(r, shape, dtype)
-            state = solver.step(fit, state, t, iterations, lower, upper, draws)
+            state = solver.step(fitness, state, t, iterations, lower, upper, draws)
             return state, state.best_f
 
         inputs = (jnp.arange(a, b), jnp.asarray(sched[a:b], jnp.int32), jnp.asarray(drops),

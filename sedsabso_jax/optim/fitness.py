@@ -16,6 +16,7 @@ float32 rounding on every backend.
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable
 from typing import Any
 
@@ -51,11 +52,6 @@ class BlackBox(eqx.Module):
         """Raw fitness of every member (row) of ``X``."""
         return self.value(X)
 
-    def blocked(self, rows: int):
-        """The same fitness for populations of ``rows`` (see
-        :meth:`L1Residual.blocked`): itself."""
-        return self
-
     def antenna_difference(self, E, G, a):
         """``(f(x + a v) - f(x - a v), non-finite count)`` per member from ``E = x``,
         ``G = v``: two evaluations; a NaN or Inf value counts as +Inf."""
@@ -79,15 +75,23 @@ class L1Residual(eqx.Module):
     """The paper's Eq. 17: ``f(p) = sum_i |W p - tau|_1`` over samples and joints.
 
     ``W`` is the stacked base regressor (Eq. 8), ``(m, d)`` with ``m = samples x joints``,
-    and ``tau`` the measured torques stacked the same way. ``W`` is stored transposed,
-    ``(d, m)`` contiguous (:attr:`WT`), the layout a product ``X W^T`` reads without a
-    transposed copy: on the 2-core AMD EPYC the 3-row product of SEDSABSO's annealing
-    candidates took 20 us with ``W`` stored (m, d) and 7.5 us with ``W^T`` (float64, 21 x
-    3000; ``python benchmarks/kernels.py``).
+    and ``tau`` the measured torques stacked the same way. ``W`` is kept in both layouts,
+    ``(m, d)`` and transposed ``(d, m)`` (:attr:`WT`): a few rows' product reads ``W^T``
+    (SEDSABSO's 3 annealing candidates: 7.6 vs 19 us float64 from ``W``; 2-core AMD
+    EPYC, 21 x 3000, ``python benchmarks/kernels.py``).
+
+    On the CPU a ``W`` of at most :data:`CONSTANT_BYTES` is also kept as static data
+    (compared by content), which the swarms' compiled code embeds as a constant: XLA
+    then lays it out for the product once, at compilation, instead of in every product
+    (2-core AMD EPYC, quiet, same process, fastest of 7 seeds: LDWPSO 40 vs 45 ms per
+    run, BSO 84 vs 87, SEDSABSO 107 vs 113, float64). The price: a new ``W`` compiles
+    anew; the same ``W`` (and any ``tau``) reuses the compiled code.
     """
 
+    W: Float[Array, "m d"]
     WT: Float[Array, "d m"]
     tau: Float[Array, " m"]
+    W_constant: _Constant | None = eqx.field(static=True)
 
     def __init__(self, W, tau, dtype=jnp.float64):
         W = np.asarray(W, dtype=float)
@@ -99,8 +103,11 @@ class L1Residual(eqx.Module):
             raise ValueError(f"W must be (m, d) and tau (m,); got W {W.shape}, tau {tau.shape}")
         if not (np.all(np.isfinite(W)) and np.all(np.isfinite(tau))):
             raise ValueError("W or tau contains NaN or Inf")
+        self.W = jnp.asarray(W, dtype=dtype)
         self.WT = jnp.asarray(np.ascontiguousarray(W.T), dtype=dtype)
         self.tau = jnp.asarray(tau, dtype=dtype)
+        small = W.nbytes <= CONSTANT_BYTES and jax.default_backend() == "cpu"
+        self.W_constant = _Constant(W) if small else None
 
     @classmethod
     def from_base(cls, base, q, qd, qdd, tau, dtype=jnp.float64) -> L1Residual:
@@ -109,24 +116,28 @@ class L1Residual(eqx.Module):
         return cls(np.asarray(base.regressor(q, qd, qdd)), np.asarray(tau), dtype=dtype)
 
     @property
-    def W(self) -> Float[Array, "m d"]:
-        """The stacked base regressor ``(m, d)`` (a transposed view of :attr:`WT`)."""
-        return self.WT.T
-
-    @property
     def dim(self) -> int:
-        return self.WT.shape[0]
+        return self.W.shape[1]
 
     def embed(self, X):
         """``X W^T``: the residuals' linear part for every member (row) of ``X``."""
-        return _matmul(X, self.WT)
+        if X.ndim > 1 and X.shape[-2] <= FEW_ROWS:
+            return _matmul(X, self.WT)
+        if self.W_constant is not None:  # a constant of the compiled code, in X's dtype
+            return _matmul(X, np.asarray(self.W_constant.array.T, dtype=X.dtype))
+        return _matmul(X, self.W.T)
 
     def value(self, E):
         return _row_sum(jnp.abs(E - self.tau))
 
     def evaluate(self, X):
-        """Eq. 17 for every member (row) of ``X``."""
-        return self.value(self.embed(X))
+        """Eq. 17 for every member (row) of ``X``: for a population one product and one
+        reduction, which XLA's CPU fuses into one kernel, so no (members x m) array is
+        written (LDWPSO, 2-core AMD EPYC, quiet, same process, fastest of 7 seeds: 45 ms
+        per run vs 58 ms with ``|r|`` summed by a product with ones, float64)."""
+        if X.ndim > 1 and X.shape[-2] <= FEW_ROWS:
+            return self.value(self.embed(X))
+        return jnp.sum(jnp.abs(self.embed(X) - self.tau), -1)
 
     def __call__(self, x):
         return self.value(self.embed(x))
@@ -138,99 +149,57 @@ class L1Residual(eqx.Module):
         return diff, (~jnp.isfinite(diff)).astype(jnp.int32)
 
     def evaluate_with_antennae(self, X, V, a):
-        """``(f(x), f(x + a v) - f(x - a v), its non-finite count)`` per member from
-        ``W x`` and ``W v`` and one pass over the residuals ``r = W x - tau`` (``|r|``
-        and ``|r + a g| - |r - a g|``). The (members x m) arrays live only inside this
-        call: a swarm carries the per-member results, not ``W x`` and ``W v``. On an
-        accelerator ``x`` and ``v`` go through one stacked product (one BLAS call); on
-        the CPU two products measured faster (50 beetles, 2-core AMD EPYC: 258 vs 294 us
-        per iteration float64, 128 vs 167 us float32; ``python benchmarks/kernels.py``)."""
+        """``(f(x), f(x + a v) - f(x - a v), its non-finite count)`` per member, from
+        ``W x``, ``W v`` and the residuals ``r = W x - tau``: ``|r + a g| - |r - a g|``
+        summed. The (members x m) arrays live only inside this call: a swarm carries
+        the per-member results, not ``W x`` and ``W v``. On the CPU ``f`` is its own
+        fused product and reduction (:meth:`evaluate`) and the antennae a second pass
+        (BSO, 2-core AMD EPYC, quiet, same process, fastest of 7 seeds: 91 vs 97 ms per
+        run for ``|r|`` and the antenna terms from one pass, float64); on an accelerator
+        ``x`` and ``v`` go through one stacked product (one BLAS call) and plain
+        reductions."""
         if jax.default_backend() == "cpu":
-            E, G = self.embed(X), self.embed(V)
-        else:
-            n = X.shape[-2]
-            EG = self.embed(jnp.concatenate([X, V], -2))
-            E, G = EG[..., :n, :], EG[..., n:, :]
-        return _l1_with_antennae(E - self.tau, G, a)
-
-    def blocked(self, rows: int):
-        """This fitness laid out for populations of ``rows`` members, made once per
-        phase outside the swarm's loop. On the CPU the residuals are taken in blocks of
-        ``c`` of the ``m`` rows of ``W``, ``c`` such that a (rows x c) array takes at
-        most :data:`CPU_BLOCK_BYTES`, so the arrays of one block stay in the core's L2
-        cache between the product and the pass that sums them (the last block padded with
-        zero rows of ``W`` and ``tau``, which add exactly 0 to every sum); the sums are
-        accumulated block by block. Elsewhere (and when one block holds all rows)
-        itself."""
-        d, m = self.WT.shape
-        c = _block_width(rows, self.WT.dtype.itemsize)
-        if jax.default_backend() != "cpu" or c >= m:
-            return self
-        k = -(-m // c)
-        c = -(-m // k)
-        WT = jnp.pad(self.WT, ((0, 0), (0, k * c - m)))
-        return L1Blocks(self, WT.reshape(d, k, c).transpose(1, 0, 2),
-                        jnp.pad(self.tau, (0, k * c - m)).reshape(k, c))
+            f = self.evaluate(X)
+            diff, bad = self.antenna_difference(self.embed(X), self.embed(V), a)
+            return f, diff, bad
+        n = X.shape[-2]
+        EG = self.embed(jnp.concatenate([X, V], -2))
+        R = EG[..., :n, :] - self.tau
+        diff = _row_sum(_antenna_terms(R, EG[..., n:, :], a))
+        return _row_sum(jnp.abs(R)), diff, (~jnp.isfinite(diff)).astype(jnp.int32)
 
 
-#: Bytes of one (members x block) array of Eq. 17's residuals on the CPU
-#: (:meth:`L1Residual.blocked`): on the 2-core AMD EPYC (1 MiB L2 per core), BSO's
-#: evaluation with 50 beetles took 198 us per iteration in blocks of 300 rows vs 258 us
-#: on all 3000 at once (float64), 97 vs 128 us in blocks of 600 (float32), and 300 to
-#: 350 us in blocks over 150 KiB (``python benchmarks/kernels.py``); 128 KiB was also
-#: best for 37 and 67 members and in whole runs (64 to 192 KiB tried).
-CPU_BLOCK_BYTES = 128 * 2**10
+#: Up to this many members a product reads ``W^T`` (:class:`L1Residual`).
+FEW_ROWS = 8
+#: The largest ``W`` (bytes) an :class:`L1Residual` keeps as a constant of the compiled
+#: code on the CPU (RS010N's 3000 x 21: 0.5 MB); a larger one is an argument.
+CONSTANT_BYTES = 4 * 2**20
 
 
-def _block_width(rows: int, itemsize: int) -> int:
-    return max(8, CPU_BLOCK_BYTES // (max(rows, 1) * itemsize))
+class _Constant:
+    """A NumPy array as static data of a pytree: hashed and compared by content (its
+    shape, dtype and SHA-1 digest), so equal data reuses compiled code."""
 
+    __slots__ = ("array", "_key")
 
-class L1Blocks(eqx.Module):
-    """Eq. 17 with the rows of ``W`` in blocks (:meth:`L1Residual.blocked`): what the
-    swarms call, the same values up to the order of the sums."""
+    def __init__(self, array):
+        self.array = np.ascontiguousarray(array)
+        self.array.flags.writeable = False
+        self._key = (self.array.shape, self.array.dtype.str,
+                     hashlib.sha1(self.array.tobytes()).hexdigest())
 
-    full: L1Residual
-    WT_blocks: Float[Array, "k d c"]
-    tau_blocks: Float[Array, "k c"]
+    def __hash__(self):
+        return hash(self._key)
 
-    @property
-    def dim(self) -> int:
-        return self.full.dim
+    def __eq__(self, other):
+        return isinstance(other, _Constant) and self._key == other._key
 
-    def blocked(self, rows: int):
-        return self.full.blocked(rows)
-
-    def _scan(self, fn, X, n_out):
-        def body(acc, block):
-            return tuple(a + s for a, s in zip(acc, fn(*block))), None
-
-        zero = jnp.zeros(X.shape[:-1], X.dtype)
-        sums, _ = jax.lax.scan(body, (zero,) * n_out, (self.WT_blocks, self.tau_blocks))
-        return sums
-
-    def evaluate(self, X):
-        """Eq. 17 for every member (row) of ``X``."""
-        if X.shape[-2] * self.full.WT.shape[1] * X.dtype.itemsize <= CPU_BLOCK_BYTES:
-            return self.full.evaluate(X)  # a few members (SEDSABSO's candidates)
-        (f,) = self._scan(lambda WT, tau: (_row_sum(jnp.abs(_matmul(X, WT) - tau)),), X, 1)
-        return f
-
-    def evaluate_with_antennae(self, X, V, a):
-        """As :meth:`L1Residual.evaluate_with_antennae`, block by block."""
-        f, diff = self._scan(lambda WT, tau: _l1_with_antennae(
-            _matmul(X, WT) - tau, _matmul(V, WT), a)[:2], X, 2)
-        return f, diff, (~jnp.isfinite(diff)).astype(jnp.int32)
+    def __repr__(self):
+        return f"constant{self.array.shape}"
 
 
 def _matmul(X, WT):
     return jnp.matmul(X, WT, precision=HIGHEST)
-
-
-def _l1_with_antennae(R, G, a):
-    """Row sums ``(|r|, |r + a g| - |r - a g|)`` and the second's non-finite flags."""
-    diff = _row_sum(_antenna_terms(R, G, a))
-    return _row_sum(jnp.abs(R)), diff, (~jnp.isfinite(diff)).astype(jnp.int32)
 
 
 HIGHEST = jax.lax.Precision.HIGHEST

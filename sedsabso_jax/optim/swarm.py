@@ -201,7 +201,7 @@ def uniforms(keys, shape, dtype):
     For threefry keys (JAX's default, with ``jax_threefry_partitionable``, the default
     since JAX 0.5) the bits come from :func:`_threefry2x32`, the same hash written out
     round by round: XLA fuses it into one elementwise loop, where JAX's own CPU lowering
-    runs it as a 5-trip loop (an iteration's r1, r2 for 50 x 21: 5.7 vs 10.9 us on the
+    runs it as a 5-trip loop (an iteration's r1, r2 for 50 x 21: 3.5 vs 7.1 us on the
     2-core AMD EPYC, ``python benchmarks/kernels.py``). Other keys go through
     ``jax.random.uniform``."""
     n = math.prod(shape)
