@@ -32,7 +32,6 @@ import numpy as np
 import sedsabso_jax as sj
 from sedsabso_jax.dynamics.limits import joint_limits
 from sedsabso_jax.identification.validation import phase_folds, select_model
-from sedsabso_jax.measurements.transmission import Transmission
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "data"))
 import real_robots  # noqa: E402  (the repository's data folder)
@@ -56,12 +55,8 @@ def datasets(tmp: Path):
                                 resample_hz=1000.0)
     yield "Franka Panda", panda, data, joint_limits("franka_panda", panda), None, {}
     tx40 = sj.robots.staubli_tx40()
-    tr = Transmission.from_gear_ratios(real_robots.TX40_GEAR_RATIOS,
-                                       coupling=real_robots.TX40_COUPLING,
-                                       offset=real_robots.TX40_OFFSET)
-    motor = sj.load_measurements(real_robots.tx40_npz(tmp / "tx40.npz"), n_joints=6,
-                                 downsample=5)
-    yield ("Staubli TX40 (motor side, 1 kHz)", tx40, tr.to_joint_side(motor),
+    data, tr = real_robots.tx40_joint_side(tmp)
+    yield ("Staubli TX40 (motor side, 1 kHz)", tx40, data,
            joint_limits("staubli_tx40", tx40), tr, {})
 
 

@@ -31,6 +31,18 @@ TX40_FLAGS = ["--robot", "staubli_tx40", "--motor-side",
 TX40_RATE_HZ = 5000.0
 
 
+def tx40_joint_side(tmp) -> tuple:
+    """The TX40 run on the joint side at 1 kHz (every 5th sample) and its transmission:
+    ``(measurements, Transmission)``; the motor-side file is written under ``tmp``."""
+    import sedsabso_jax as sj
+    from sedsabso_jax.measurements.transmission import Transmission
+
+    tr = Transmission.from_gear_ratios(TX40_GEAR_RATIOS, coupling=TX40_COUPLING,
+                                       offset=TX40_OFFSET)
+    motor = sj.load_measurements(tx40_npz(Path(tmp) / "tx40.npz"), n_joints=6, downsample=5)
+    return tr.to_joint_side(motor), tr
+
+
 def panda_npz(path) -> Path:
     """The Panda run as a measurement file: times, positions, velocities (recorded) and
     torques (link-side sensors). The time stamps are kept as recorded (steps of 0.7 to

@@ -43,7 +43,7 @@ def test_every_function_matches_evosax():
     ours = jax.jit(jax.vmap(P.bbob_value, in_axes=(0, None)))  # one compiled switch
     for i, name in enumerate(names):
         inst = P.bbob_problem(i, dim, instances=1).instances[0]
-        _, x_opt, f_opt, R, Q = inst.fitness.args
+        x_opt = inst.fitness.args[1]
         params = ref.sample_params(jax.random.key(1))
         assert np.array_equal(params.x_opt, x_opt) and float(params.f_opt) == inst.f_opt
         params = params.replace(fn_id=jax.numpy.int32(i))
@@ -51,6 +51,28 @@ def test_every_function_matches_evosax():
                               params)
         np.testing.assert_allclose(np.asarray(ours(x, inst.fitness.args)), np.asarray(want),
                                    rtol=1e-9, err_msg=name)
+
+
+@pytest.mark.parametrize("dim", [2, 40])
+def test_gallagher_peaks_drawn_once_match_evosax(dim):
+    """f21 and f22 from peaks drawn once per instance against evosax's function, which
+    draws them at every evaluation, on several instances (a wrong draw, a peak's
+    alpha or range, or a transposed rotation changes the values by far more than 1e-9)."""
+    from evosax.problems.bbob.bbob_fns import bbob_fns
+
+    x = np.random.default_rng(dim).uniform(-6, 6, (16, dim))  # some outside the box
+    for index in sorted(P.GALLAGHER):
+        name = P.bbob_functions()[index]
+        for inst in P.bbob_problem(index, dim, instances=3).instances:
+            _, x_opt, f_opt, R, Q, _ = inst.fitness.args
+            value, pen = jax.vmap(bbob_fns[name], in_axes=(0, None, None, None, None))(
+                x, x_opt, R, Q, dim)
+            want = np.asarray(value + pen) + float(f_opt)
+            np.testing.assert_allclose(np.asarray(inst.fitness.evaluate(x)), want,
+                                       rtol=1e-9, err_msg=name)
+            # at the optimum the value is f_opt
+            assert float(inst.fitness(x_opt * P.GALLAGHER[index][3])) == pytest.approx(
+                inst.f_opt, abs=1e-9)
 
 
 def test_l1_optimum_in_a_box_matches_cvxpy():

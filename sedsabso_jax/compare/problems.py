@@ -54,19 +54,74 @@ def bbob_functions() -> tuple[str, ...]:
     return tuple(bbob_fns)
 
 
+#: evosax's Gallagher functions, f21 (101 peaks) and f22 (21 peaks), by 0-based index:
+#: (peaks, the first peak's alpha, the other peaks' range, x_opt's factor)
+GALLAGHER = {20: (101, 1000.0, 5.0, 1.0), 21: (21, 1000.0 ** 2, 4.9, 3.92 / 4.0)}
+
+
 @functools.cache
 def _branches():
     from evosax.problems.bbob.bbob_fns import bbob_fns
 
-    return tuple(bbob_fns[name] for name in bbob_functions())
+    def evosax_branch(fn):
+        return lambda x, x_opt, R, Q, peaks: fn(x, x_opt, R, Q, x.shape[0])
+
+    def gallagher_branch(which):
+        return lambda x, x_opt, R, Q, peaks: _gallagher(x, R, *peaks[which])
+
+    out = [evosax_branch(bbob_fns[name]) for name in bbob_functions()]
+    for which, index in enumerate(sorted(GALLAGHER)):
+        out[index] = gallagher_branch(which)
+    return tuple(out)
 
 
 def bbob_value(x, args):
     """BBOB function ``args[0]`` (0-based: f1 is 0) of instance ``args[1:]`` at ``x``:
     the function, its boundary penalty and ``f_opt``."""
-    fid, x_opt, f_opt, R, Q = args
-    value, penalty = jax.lax.switch(fid, _branches(), x, x_opt, R, Q, x.shape[0])
+    fid, x_opt, f_opt, R, Q, peaks = args
+    value, penalty = jax.lax.switch(fid, _branches(), x, x_opt, R, Q, peaks)
     return value + penalty + f_opt
+
+
+def gallagher_peaks(index: int, x_opt, R, Q):
+    """The peaks of evosax's Gallagher function ``index`` (20: f21, 21: f22) of one
+    instance: ``(R y_i, the diagonal of C_i, w_i)`` per peak, drawn as evosax draws them
+    (Hansen et al. 2009, p. 13). evosax draws them, and multiplies three d x d matrices per
+    peak, inside every evaluation (d = 40, 101 peaks: 0.5 MFLOP a point); drawn once per
+    instance, an evaluation is one product ``R x`` and a pass over the peaks."""
+    from evosax.problems.bbob.bbob_fns import lambda_alpha
+
+    n, alpha0, spread, scale = GALLAGHER[index]
+    x_opt = jnp.asarray(x_opt) * scale
+    d = x_opt.shape[0]
+    key = jax.random.fold_in(jax.random.key(0), Q[0, 0])
+    k = jnp.arange(n)
+    w = jnp.where(k == 0, 10.0, 1.1 + 8.0 * (k - 1.0) / (n - 2.0))
+    alpha_set = jnp.power(1000.0, 2.0 * jnp.arange(n - 1) / (n - 2))
+    key, sub = jax.random.split(key)
+    alpha = jnp.concatenate([jnp.array([alpha0]), jax.random.permutation(sub, alpha_set)])
+    c = jax.vmap(lambda a: jnp.diag(lambda_alpha(a, d, d)) / a ** 0.25)(alpha)
+    key, sub = jax.random.split(key)
+    mask = jnp.ones(d, bool)
+    perms = jax.vmap(lambda kk: jax.random.choice(kk, jnp.arange(d), shape=(d,),
+                                                  replace=False, p=mask))(
+        jax.random.split(sub, n))
+    c = jnp.take_along_axis(c, perms, axis=1)
+    key, sub = jax.random.split(key)
+    y = jax.random.uniform(sub, (n, d), minval=-spread, maxval=spread).at[0].set(x_opt)
+    return y @ jnp.asarray(R).T, c, w
+
+
+def _gallagher(x, R, Ry, c, w):
+    """Gallagher's Gaussian peaks function at ``x`` from its peaks
+    (:func:`gallagher_peaks`): ``(osz(10 - max_i w_i exp(-z_i^T C_i z_i / 2d))^2,
+    penalty)`` with ``z_i = R (x - y_i)``."""
+    from evosax.problems.bbob.bbob_fns import f_pen, transform_osz
+
+    d = x.shape[0]
+    z = R @ x - Ry
+    peak = w * jnp.exp(-jnp.sum(c * z * z, axis=-1) / (2 * d))
+    return jnp.square(transform_osz(10.0 - jnp.max(peak))), f_pen(x, d)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -108,6 +163,16 @@ def _meta(dim: int):
                            max_num_dims=dim)
 
 
+@functools.cache
+def _instance(dim: int, k: int):
+    """Instance ``k`` of dimension ``dim``, shared by the 24 functions: ``x_opt, f_opt, R,
+    Q`` and the Gallagher peaks."""
+    p = _meta(dim).sample_params(jax.random.key(k + 1))
+    x_opt, R, Q = (jnp.asarray(a, float) for a in (p.x_opt, p.R, p.Q))
+    peaks = tuple(gallagher_peaks(i, x_opt, R, Q) for i in sorted(GALLAGHER))
+    return x_opt, jnp.asarray(p.f_opt, float), R, Q, peaks
+
+
 def bbob_problem(index: int, dim: int, instances: int = BBOB_INSTANCES) -> Problem:
     """BBOB function f``index + 1`` in ``dim`` dimensions, ``instances`` seeded instances
     (instance k draws evosax's parameters from ``jax.random.key(k + 1)``: the same
@@ -117,10 +182,9 @@ def bbob_problem(index: int, dim: int, instances: int = BBOB_INSTANCES) -> Probl
     names = bbob_functions()
     out = []
     for k in range(instances):
-        p = _meta(dim).sample_params(jax.random.key(k + 1))
-        args = (jnp.int32(index), jnp.asarray(p.x_opt, float), jnp.asarray(p.f_opt, float),
-                jnp.asarray(p.R, float), jnp.asarray(p.Q, float))
-        out.append(Instance(BlackBox(bbob_value, args), float(p.f_opt), 1.0))
+        x_opt, f_opt, R, Q, peaks = _instance(dim, k)
+        args = (jnp.int32(index), x_opt, f_opt, R, Q, peaks)
+        out.append(Instance(BlackBox(bbob_value, args), float(f_opt), 1.0))
     box = np.full(dim, 5.0)
     return Problem(f"bbob-f{index + 1:02d}-{names[index]}-d{dim:02d}", "bbob", dim, -box, box,
                    tuple(out), f"BBOB f{index + 1} {fn_names_dict[names[index]]}, d = {dim}")

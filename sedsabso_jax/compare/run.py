@@ -40,8 +40,8 @@ SCHEMA = "sedsabso-jax/compare/1"
 #: the default line-up: the paper's three swarms, evosax's PSO with evosax's own settings
 #: (a textbook PSO from a general library) and CMA-ES, BBOB's reference method.
 DEFAULT_ALGORITHMS = ("SEDSABSO", "BSO", "LDWPSO", "PSO", "CMA_ES")
-#: evaluations per run, times the dimension: keeps ``compare --suite all --runs 100`` within
-#: 30 minutes on a 2-core CPU (README, "compare"; 1000d took longer than that)
+#: evaluations per run, times the dimension: ``compare --suite all --runs 100`` took 27.8 min
+#: on a quiet 2-core CPU (README, "compare")
 DEFAULT_BUDGET = "500d"
 #: BBOB targets on f - f_opt (COCO's 51 targets, 1e2 .. 1e-8); identification targets on
 #: the relative excess over the exact optimum (1 .. 1e-8).
