@@ -14,6 +14,7 @@ run leaves none.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 import time
@@ -27,6 +28,8 @@ WEIGHTS = (AUTO, "residual", "limits", "equal")
 #: ``compare``'s default line-up (sedsabso_jax/compare/run.py, kept equal by a test)
 DEFAULT_ALGORITHMS = ("SEDSABSO", "BSO", "LDWPSO", "PSO", "CMA_ES")
 DEFAULT_BUDGET = "500d"
+#: ``identify --prior-strength cv``'s grid (identification/validation.py, kept equal by a test)
+PRIOR_STRENGTHS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)
 BUILTIN_ROBOTS = ("rs010n", "kuka_lwr4", "staubli_tx40", "franka_panda")
 
 
@@ -210,16 +213,35 @@ def _candidates(args, limits):
     return frictions, weightings
 
 
+def _prior_strength(text: str):
+    """``--prior-strength``: a number >= 0, or ``cv``."""
+    if text.strip().lower() == "cv":
+        return "cv"
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected a number >= 0 or 'cv', got {text!r}")
+    return value
+
+
 def _cmd_identify(args) -> None:
     from .dynamics import robots
     from .dynamics.base_parameters import base_parameters
     from .dynamics.limits import joint_limits
     from .identification.identify import identify
     from .identification.report import IdentificationReport
-    from .identification.validation import cross_validate, select_model
+    from .identification.validation import choose_prior_strength, cross_validate, select_model
     from .measurements.load import load_measurements
 
     _check_writable(args.out, args.json, args.urdf_out)
+    if args.prior_strength != 0.0 and not args.physical:
+        raise ValueError("--prior-strength needs --physical: the pull to the a-priori "
+                         "parameters is part of the physically consistent fit")
+    if args.prior_strength == "cv" and args.folds == 0:
+        raise ValueError("--prior-strength cv chooses by cross-validation, which --folds 0 "
+                         "turns off: give a number")
     if args.urdf_out is not None and not args.physical:
         raise ValueError("--urdf-out needs --physical: a simulator's URDF needs physically "
                          "consistent link parameters")
@@ -254,9 +276,22 @@ def _cmd_identify(args) -> None:
         chosen = {"method": method, "sigma": sigma, "friction": frictions[0]}
         if args.folds:
             cv = cross_validate(robot, *arrays, folds=args.folds, **common, **chosen)
+    prior_selection = None
+    if args.physical:
+        strength = args.prior_strength
+        if strength == "cv":
+            prior_selection = choose_prior_strength(robot, *arrays, strengths=PRIOR_STRENGTHS,
+                                                    folds=args.folds, **common, **chosen)
+            strength = prior_selection.chosen
+            cv = dict(prior_selection.candidates)[strength]
+        elif strength and args.folds:
+            cv = cross_validate(robot, *arrays, folds=args.folds, **common, **chosen,
+                                prior_strength=strength)
+        common["prior_strength"] = strength
     ident = identify(robot, data.q, data.qd, data.qdd, data.tau, **common, **chosen)
     report = IdentificationReport.evaluate(ident, data, held_out, limits,
-                                           cross_validation=cv, selection=selection)
+                                           cross_validation=cv, selection=selection,
+                                           prior_selection=prior_selection)
     settings = {"robot": args.robot, "data": os.path.abspath(args.data),
                 "validate": None if args.validate is None else os.path.abspath(args.validate),
                 "torque_limits": limits, "loading": {**load, "data_info": data.info},
@@ -407,6 +442,10 @@ def build_parser() -> argparse.ArgumentParser:
     ip.add_argument("--physical", action="store_true",
                     help="physically consistent parameters (OLS/WLS): positive-definite "
                     "pseudo-inertia per link, friction >= 0")
+    ip.add_argument("--prior-strength", type=_prior_strength, default=0.0, metavar="S|cv",
+                    help="with --physical: pull toward the robot's a-priori parameters, in "
+                    "multiples of the data term's mean curvature (0), or 'cv' to choose it "
+                    "by cross-validation from " + ", ".join(f"{v:g}" for v in PRIOR_STRENGTHS))
     ip.add_argument("--runs", type=_positive_int, default=1,
                     help="swarm runs, the best kept (1)")
     ip.add_argument("--iterations", type=_positive_int, default=600,

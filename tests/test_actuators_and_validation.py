@@ -15,6 +15,7 @@ import sedsabso_jax as sj
 from sedsabso_jax import cli
 from sedsabso_jax.identification.model import TorqueModel
 from sedsabso_jax.identification.validation import (
+    choose_prior_strength,
     cross_validate,
     phase_folds,
     repeat_period,
@@ -170,6 +171,45 @@ def test_selection_finds_the_torque_offset_and_rejects_extra_terms(rng):
     assert 0.8 < cv.score < 1.5  # about the 1 % noise: the model generalises
     with pytest.raises(ValueError, match="fold labels must be integers"):
         cross_validate(robot, t, data.q, data.qd, data.qdd, tau, folds=np.zeros(3, int))
+
+
+def _rs010n_run(n, amplitude, noise, seed=1):
+    robot = sj.robots.rs010n()
+    rng = np.random.default_rng(seed)
+    traj = sj.FourierTrajectory(rng.uniform(-amplitude, amplitude, (3, 4)),
+                                rng.uniform(-amplitude, amplitude, (3, 4)), np.zeros(3),
+                                wf=2 * np.pi / 10)
+    t = np.arange(n) * (20.0 / n)  # two periods
+    data = sj.simulate_measurements_along(robot, traj, t, torque_noise=noise, seed=3)
+    return robot, t, data
+
+
+def test_prior_strength_follows_what_the_data_can_say():
+    """The pull of a physical fit toward the a-priori parameters, chosen by
+    cross-validation. 60 noisy samples of a small motion, the robot's parameters (the
+    data's source) as prior: the strongest pull predicts the held-out folds best and is
+    chosen. Noise that drowns the differences: the strongest pull within one standard
+    error, not the lowest. Rich clean data and a prior whose masses are doubled: a
+    negligible pull at most, and a strong one several times worse."""
+    robot, t, d = _rs010n_run(60, 0.1, 0.1)
+    sel = choose_prior_strength(robot, t, d.q, d.qd, d.qdd, d.tau)
+    cv = dict(sel.candidates)
+    assert sel.best == sel.chosen == 1.0 and cv[1.0].score < cv[0.0].score
+    # torque noise (30 %) drowns the differences: every strength is within one standard
+    # error of the lowest (1e-3 here), and the rule keeps the strongest pull
+    robot, t, d = _rs010n_run(1000, 0.05, 0.3, seed=0)
+    sel = choose_prior_strength(robot, t, d.q, d.qd, d.qdd, d.tau)
+    assert sel.best != 1.0 and sel.chosen == 1.0
+    robot, t, d = _rs010n_run(1000, 0.3, 0.01, seed=0)
+    wrong = np.asarray(robot.params) * np.tile(np.r_[np.ones(6), 2.0, np.ones(5)], 3)
+    sel = choose_prior_strength(robot, t, d.q, d.qd, d.qdd, d.tau, prior=wrong)
+    cv = dict(sel.candidates)
+    assert sel.chosen <= 1e-6 and cv[1.0].score > 5 * cv[sel.chosen].score
+    assert sel.as_dict()["candidates"][0]["prior_strength"] == 0.0
+    with pytest.raises(ValueError, match="method 'OLS' or 'WLS'"):
+        choose_prior_strength(robot, t, d.q, d.qd, d.qdd, d.tau, method="L1")
+    with pytest.raises(ValueError, match="strengths must be numbers >= 0"):
+        choose_prior_strength(robot, t, d.q, d.qd, d.qdd, d.tau, strengths=(0.0, -1.0))
 
 
 # ------------------------------------------------------------------- real robots

@@ -156,6 +156,7 @@ class Setup:
     physical: bool
     prior: np.ndarray
     prior_weight: float
+    prior_strength: float
     box: Any
     runs: int
     iterations: int
@@ -173,16 +174,17 @@ class Setup:
         if "smooth" in self.model.friction:
             out["smooth_velocity"] = float(self.model.smooth_velocity)
         if self.physical:
-            out.update(prior_weight=self.prior_weight, psd_margin=PSD_MARGIN)
+            out.update(prior_weight=self.prior_weight, prior_strength=self.prior_strength,
+                       psd_margin=PSD_MARGIN)
         return out
 
 
 def prepare(robot: Robot, *, method: str = "OLS", friction: str = "viscous-coulomb",
             sigma=None, limits=None, physical: bool = False, prior=None,
-            prior_weight: float = 0.0, box=(0.5, 0.5), runs: int = 1, iterations: int = 600,
-            seed: int = 0, solver=None, smooth_velocity: float = SMOOTH_VELOCITY,
-            base: BaseParameters | None = None, transmission=None, warn: bool = True
-            ) -> Setup:
+            prior_weight: float = 0.0, prior_strength: float = 0.0, box=(0.5, 0.5),
+            runs: int = 1, iterations: int = 600, seed: int = 0, solver=None,
+            smooth_velocity: float = SMOOTH_VELOCITY, base: BaseParameters | None = None,
+            transmission=None, warn: bool = True) -> Setup:
     """Check :func:`identify`'s settings (its docstring says what they mean) and build the
     torque model; nothing is fitted. ``warn``: say which extra columns the base regressor
     already spans."""
@@ -196,8 +198,10 @@ def prepare(robot: Robot, *, method: str = "OLS", friction: str = "viscous-coulo
     if physical and method not in ("OLS", "WLS"):
         raise ValueError(f"physical=True is a least-squares fit: use method 'OLS' or 'WLS', "
                          f"not {method!r}")
-    if not (np.isfinite(prior_weight) and prior_weight >= 0):
-        raise ValueError(f"prior_weight must be >= 0, got {prior_weight!r}")
+    for name, v in (("prior_weight", prior_weight), ("prior_strength", prior_strength)):
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                or not (np.isfinite(v) and v >= 0):
+            raise ValueError(f"{name} must be a number >= 0, got {v!r}")
     if not (np.isfinite(smooth_velocity) and smooth_velocity > 0):
         raise ValueError(f"smooth_velocity must be > 0, got {smooth_velocity!r}")
     if method in SWARMS:
@@ -235,6 +239,7 @@ def prepare(robot: Robot, *, method: str = "OLS", friction: str = "viscous-coulo
         solver = _check_swarm_settings(method, solver, box, model.dim)
     return Setup(model=model, method=method, kind=kind, given=given, limits=limits,
                  physical=bool(physical), prior=prior, prior_weight=float(prior_weight),
+                 prior_strength=float(prior_strength),
                  box=box, runs=int(runs), iterations=int(iterations), seed=int(seed),
                  solver=solver)
 
@@ -288,7 +293,8 @@ def fit_regressor(setup: Setup, Y, tau, *, warn: bool = True) -> RegressorFit:
 
     result, full, extra = None, None, {}
     if setup.physical:
-        fit_p = fit_physical(setup.model, factor, setup.prior, setup.prior_weight)
+        fit_p = fit_physical(setup.model, factor, setup.prior, setup.prior_weight,
+                             setup.prior_strength)
         x, full = fit_p.values, fit_p.full_params
         extra["physical_fit"] = {"solver": fit_p.solver, "status": fit_p.status,
                                  "iterations": fit_p.iterations, "seconds": fit_p.seconds}
@@ -312,7 +318,8 @@ def fit_regressor(setup: Setup, Y, tau, *, warn: bool = True) -> RegressorFit:
 def identify(robot: Robot, q, qd, qdd, tau, *, method: str = "OLS",
              friction: str = "viscous-coulomb", sigma=None, limits=None,
              physical: bool = False, prior=None, prior_weight: float = 0.0,
-             box=(0.5, 0.5), runs: int = 1, iterations: int = 600, seed: int = 0,
+             prior_strength: float = 0.0, box=(0.5, 0.5), runs: int = 1,
+             iterations: int = 600, seed: int = 0,
              solver=None, smooth_velocity: float = SMOOTH_VELOCITY,
              base: BaseParameters | None = None, transmission=None,
              weights=_UNSET) -> Identification:
@@ -336,6 +343,9 @@ def identify(robot: Robot, q, qd, qdd, tau, *, method: str = "OLS",
             the swarms' box (projected on the base; extras centred on 0) and target of
             ``prior_weight``.
         prior_weight: weight of ``||p - prior||^2`` in a physical fit.
+        prior_strength: the same pull, scale-free: times the data term's mean curvature
+            (added to ``prior_weight``); :func:`~.validation.choose_prior_strength`
+            chooses it by cross-validation (``--prior-strength cv``).
         box: the swarms' box: ``(fraction, floor)`` gives centre ``+- max(fraction
             |centre|, floor)`` (:func:`~sedsabso_jax.optim.box_around`); or explicit
             ``(lower, upper)`` arrays of length ``dim``.
@@ -356,7 +366,8 @@ def identify(robot: Robot, q, qd, qdd, tau, *, method: str = "OLS",
         _deprecation.warn("identify(weights=...)", "sigma=...")
         sigma = weights
     setup = prepare(robot, method=method, friction=friction, sigma=sigma, limits=limits,
-                    physical=physical, prior=prior, prior_weight=prior_weight, box=box,
+                    physical=physical, prior=prior, prior_weight=prior_weight,
+                    prior_strength=prior_strength, box=box,
                     runs=runs, iterations=iterations, seed=seed, solver=solver,
                     smooth_velocity=smooth_velocity, base=base, transmission=transmission)
     q, qd, qdd, tau = check_data(robot, q, qd, qdd, tau)

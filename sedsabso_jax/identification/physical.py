@@ -18,10 +18,12 @@ with ``W, b`` the (weighted) stacked regressor and torques, ``K`` the map from f
 parameters and ``p`` the full parameters (12 per link). It is a convex semidefinite
 programme, solved to its global optimum by Clarabel through cvxpy (the data enter only
 through the ``d x d`` triangular factor of :func:`~sedsabso_jax.optim.linear.factorize`).
-``lambda`` is the user's ``prior_weight``, but at least :data:`RIDGE` times the data term's
-mean curvature: the data leave some directions of ``p`` free (the non-identifiable ones),
-and along some of them the feasible set is unbounded, so a tiny pull to the prior keeps
-the solution finite. A solve that is not optimal is an error; an inaccurate one a warning.
+``lambda`` is the user's ``prior_weight`` plus ``prior_strength`` times the data term's
+mean curvature (the scale-free form, chosen by cross-validation in
+:func:`~.validation.choose_prior_strength`), but at least :data:`RIDGE` times that
+curvature: the data leave some directions of ``p`` free (the non-identifiable ones), and
+along some of them the feasible set is unbounded, so a tiny pull to the prior keeps the
+solution finite. A solve that is not optimal is an error; an inaccurate one a warning.
 """
 
 from __future__ import annotations
@@ -63,11 +65,15 @@ def _inertial_params(J):
             -J[0, 1], -J[0, 2], -J[1, 2], J[3, 3], J[0, 3], J[1, 3], J[2, 3]]
 
 
-def fit_physical(model: TorqueModel, factor: Factorization, prior, prior_weight: float = 0.0
-                 ) -> PhysicalFit:
+def fit_physical(model: TorqueModel, factor: Factorization, prior, prior_weight: float = 0.0,
+                 prior_strength: float = 0.0) -> PhysicalFit:
     """Physically consistent least squares (see the module docstring) for ``model``, on the
     data factored in ``factor`` (``factorize(W, b)`` of the weighted stacked regressor and
-    torques); ``prior`` the full a-priori parameters (12 per link)."""
+    torques); ``prior`` the full a-priori parameters (12 per link). The pull to the prior
+    is ``lambda = prior_weight + prior_strength * (the data term's mean curvature)``:
+    ``prior_strength`` is scale-free (the same value means the same balance for any
+    weighting, robot or number of samples), which is what cross-validation chooses
+    (:func:`~.validation.choose_prior_strength`)."""
     import cvxpy as cp
 
     n = model.robot.n_joints
@@ -80,8 +86,8 @@ def fit_physical(model: TorqueModel, factor: Factorization, prior, prior_weight:
     C[K.shape[0]:, d_full:] = np.eye(n_extra)
     M = factor.R @ C[factor.perm]  # data term: ||M [p; e] - c||^2 + const
     scale = max(float(np.linalg.norm(factor.c)), 1e-300)  # the objective in units of ||c||^2
-    ridge = RIDGE * float(np.sum(M ** 2)) / (d_full + n_extra)
-    lam = max(float(prior_weight), ridge)
+    curvature = float(np.sum(M ** 2)) / (d_full + n_extra)
+    lam = max(float(prior_weight) + float(prior_strength) * curvature, RIDGE * curvature)
 
     J = [cp.Variable((4, 4), symmetric=True, name=f"J{i + 1}") for i in range(n)]
     friction = cp.Variable(2 * n, name="friction")  # (Fc_i, Fv_i) per joint

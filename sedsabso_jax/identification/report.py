@@ -11,7 +11,7 @@ import numpy as np
 from .._output import jsonable, markdown_table, pyplot, save_figure, write_json, write_text
 from .identify import Identification
 from .metrics import Metrics, validation_metrics
-from .validation import CrossValidation, Selection
+from .validation import CrossValidation, PriorSelection, Selection
 
 
 def figure_torques(times, tau_measured, tau_predicted, joint_names, title: str):
@@ -43,7 +43,9 @@ class IdentificationReport:
     ``validation`` their :class:`~.metrics.Metrics` (``validation`` None without held-out
     data); ``predicted`` the predicted torques of each; ``cross_validation`` the chosen
     setting's :class:`~.validation.CrossValidation` on ``data`` and ``selection`` the
-    :class:`~.validation.Selection` it came from (each None when not run).
+    :class:`~.validation.Selection` it came from, ``prior_selection`` the
+    :class:`~.validation.PriorSelection` of a physical fit's pull to the prior (each None
+    when not run).
     """
 
     ident: Identification
@@ -55,10 +57,12 @@ class IdentificationReport:
     predicted: tuple[np.ndarray, np.ndarray | None]
     cross_validation: CrossValidation | None = None
     selection: Selection | None = None
+    prior_selection: PriorSelection | None = None
 
     @classmethod
     def evaluate(cls, ident: Identification, data, held_out=None, limits=None, *,
-                 cross_validation=None, selection=None) -> IdentificationReport:
+                 cross_validation=None, selection=None, prior_selection=None
+                 ) -> IdentificationReport:
         """Predict the torques of ``data`` (and ``held_out``) and compare."""
         fit_pred = ident.predict(data.q, data.qd, data.qdd)
         val_pred = None if held_out is None else ident.predict(held_out.q, held_out.qd,
@@ -67,7 +71,7 @@ class IdentificationReport:
                    validation_metrics(data.tau, fit_pred, limits),
                    None if held_out is None else validation_metrics(held_out.tau, val_pred,
                                                                     limits),
-                   (fit_pred, val_pred), cross_validation, selection)
+                   (fit_pred, val_pred), cross_validation, selection, prior_selection)
 
     def text(self) -> str:
         """The parameters and per-joint metrics as text (markdown tables)."""
@@ -94,6 +98,11 @@ class IdentificationReport:
                       markdown_table(["method", "sigma", "friction", "parameters",
                                       f"CV {self.cross_validation.measure}", ""],
                                      self.selection.table())]
+        if self.prior_selection is not None:
+            lines += ["", "pull toward the a-priori parameters chosen by cross-validation (the "
+                          "strongest within one standard error of the lowest):",
+                      markdown_table(["prior strength", f"CV {self.cross_validation.measure}",
+                                      ""], self.prior_selection.table())]
         if self.validation is not None:
             lines += ["", f"validation ({self.held_out.source}, {self.held_out.n_samples} "
                           f"samples):", self.validation.table(robot.joint_names)]
@@ -111,7 +120,9 @@ class IdentificationReport:
             "validation": None if self.validation is None else self.validation.as_dict(),
             "cross_validation": None if self.cross_validation is None else {
                 **self.cross_validation.as_dict(),
-                "selection": None if self.selection is None else self.selection.as_dict()},
+                "selection": None if self.selection is None else self.selection.as_dict(),
+                "prior_strength": None if self.prior_selection is None
+                else self.prior_selection.as_dict()},
             "settings": {**settings, **ident.settings},
         })
 

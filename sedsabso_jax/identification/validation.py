@@ -48,6 +48,9 @@ FRICTION_CANDIDATES = ("viscous-coulomb", "viscous-coulomb+offset",
                        "viscous-coulomb+offset+quadratic+smooth")
 #: The candidate weightings: (method, sigma), simplest first.
 WEIGHTING_CANDIDATES = (("OLS", None), ("WLS", "residual"), ("WLS", "limits"))
+#: The candidate pulls of a physically consistent fit toward the a-priori parameters
+#: (:func:`choose_prior_strength`; multiples of the data term's mean curvature), none first.
+PRIOR_STRENGTHS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)
 
 
 def repeat_period(times, q, *, correlation: float = REPEAT_CORRELATION) -> float | None:
@@ -243,6 +246,61 @@ def select_model(robot, times, q, qd, qdd, tau, *, frictions=None, weightings=No
     order = sorted(range(len(tried)), key=lambda i: (tried[i][1].n_parameters, i))
     chosen = next(tried[i][0] for i in order if _not_worse(tried[i][1], best))
     return Selection(candidates=tuple(tried), chosen=chosen, best=best_settings)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class PriorSelection:
+    """What :func:`choose_prior_strength` returns: each strength's cross-validation (in
+    the order tried) and the chosen and the lowest strength."""
+
+    candidates: tuple[tuple[float, CrossValidation], ...]
+    chosen: float
+    best: float
+
+    def table(self) -> list[list[str]]:
+        """Rows ``[strength, CV error +- SE, chosen]``."""
+        return [[f"{s:g}", f"{cv.score:.4f} +- {cv.standard_error:.4f}",
+                 "chosen" if s == self.chosen else ("lowest" if s == self.best else "")]
+                for s, cv in self.candidates]
+
+    def as_dict(self) -> dict:
+        return {"rule": "strongest pull to the prior whose fold-by-fold excess over the "
+                        "lowest cross-validated error is at most one standard error (or 1 % "
+                        "of the lowest)",
+                "chosen": self.chosen, "lowest": self.best,
+                "candidates": [{"prior_strength": s, **cv.as_dict()}
+                               for s, cv in self.candidates]}
+
+
+def choose_prior_strength(robot, times, q, qd, qdd, tau, *, strengths=PRIOR_STRENGTHS,
+                          folds=DEFAULT_FOLDS, **settings) -> PriorSelection:
+    """Choose how strongly a physically consistent fit is pulled toward the a-priori
+    parameters (``prior_strength`` of :func:`~.identify.identify`) by cross-validation over
+    the same phase folds as :func:`select_model`: every strength in ``strengths`` is
+    cross-validated with ``settings`` (``physical=True`` is implied; ``method``,
+    ``friction``, ``sigma``, ``prior``, ``limits``, ...), and the STRONGEST pull whose
+    fold-by-fold excess over the lowest error is within one standard error is kept (the
+    one-standard-error rule: the most regularised model the data cannot tell from the
+    best). The held-out folds are fitted by nothing, chosen by nothing else."""
+    strengths = tuple(float(v) for v in strengths)
+    if not strengths or any(not (np.isfinite(v) and v >= 0) for v in strengths):
+        raise ValueError(f"strengths must be numbers >= 0, at least one, got {strengths}")
+    if settings.get("method", "OLS") not in ("OLS", "WLS"):
+        raise ValueError("the pull to the prior is a physically consistent least-squares "
+                         "fit: method 'OLS' or 'WLS'")
+    (q, qd, qdd, tau), labels, period = _folds_of(robot, times, q, qd, qdd, tau, folds)
+    settings = {**settings, "physical": True}
+    if settings.get("base") is None:
+        settings["base"] = base_parameters(robot)
+    tried, Y = [], None
+    for v in strengths:
+        setup = prepare(robot, warn=False, **{**settings, "prior_strength": v})
+        Y = setup.model.regressor(q, qd, qdd) if Y is None else Y
+        tried.append((v, _cross_validate(setup, Y, tau, labels, period,
+                                         settings.get("sigma"))))
+    best_v, best = min(tried, key=lambda c: c[1].score)
+    chosen = max(v for v, cv in tried if _not_worse(cv, best))
+    return PriorSelection(candidates=tuple(tried), chosen=chosen, best=best_v)
 
 
 def _not_worse(cv: CrossValidation, best: CrossValidation) -> bool:
