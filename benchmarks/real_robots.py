@@ -9,10 +9,13 @@ choice is made on the other 4 (its own 4-fold cross-validation) and the chosen m
 fitted to them, predicts the held-out stretch, a part of the motion no choice or fit saw.
 Beside it, fixed settings are scored on the same outer folds: plain OLS (Coulomb + viscous
 friction) and the package's previous default (WLS weighted by 1/limit with offset,
-quadratic and smooth-Coulomb terms, chosen on the KUKA's repeat run). The KUKA's second
+quadratic and smooth-Coulomb terms, chosen on the KUKA's repeat run), and the same
+choice among physically consistent fits with the pull to the a-priori parameters also
+chosen by the inner cross-validation (``identify --physical --prior-strength cv``;
+``--no-physical`` leaves it out, the slow part). The KUKA's second
 run repeats the first's trajectory: its figure measures repeatability, not generalisation.
 
-    python benchmarks/real_robots.py [--json benchmarks/results/real_robots.json]
+    python benchmarks/real_robots.py [--json benchmarks/results/real_robots.json] [--no-physical]
 
 Figures: NRMS over the joint torque limits [%] (RMS error / (2 limit), mean over joints).
 """
@@ -31,11 +34,16 @@ import numpy as np
 
 import sedsabso_jax as sj
 from sedsabso_jax.dynamics.limits import joint_limits
-from sedsabso_jax.identification.validation import phase_folds, select_model
+from sedsabso_jax.identification.validation import (
+    choose_prior_strength,
+    phase_folds,
+    select_model,
+)
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "data"))
 import real_robots  # noqa: E402  (the repository's data folder)
 
+PHYSICAL = "physical, chosen by cross-validation (model and pull to the prior)"
 FIXED = {
     "OLS, Coulomb + viscous": dict(method="OLS", friction="viscous-coulomb"),
     "previous default: WLS 1/limit, offset+quadratic+smooth":
@@ -69,13 +77,15 @@ def subset(data, mask):
     return (data.times[mask], data.q[mask], data.qd[mask], data.qdd[mask], data.tau[mask])
 
 
-def evaluate(name, robot, data, limits, transmission, runs, folds=5) -> dict:
+def evaluate(name, robot, data, limits, transmission, runs, folds=5, physical=True) -> dict:
     base = sj.base_parameters(robot)
     common = dict(limits=limits.torque_limits, base=base, transmission=transmission)
     labels, period = phase_folds(data.times, data.q, folds)
     t0 = time.perf_counter()
     held = {"default (chosen by cross-validation)": [], **{k: [] for k in FIXED}}
-    chosen_per_fold = []
+    if physical:
+        held[PHYSICAL] = []
+    chosen_per_fold, physical_per_fold = [], []
     for k in range(folds):
         train, test = labels != k, labels == k
         inner = np.searchsorted(np.unique(labels[train]), labels[train])  # folds 0..3
@@ -89,6 +99,16 @@ def evaluate(name, robot, data, limits, transmission, runs, folds=5) -> dict:
                 pred = ident.predict(data.q[test], data.qd[test], data.qdd[test])
                 held[label].append(sj.validation_metrics(
                     data.tau[test], pred, limits.torque_limits).nrms_limits_percent)
+            if physical:  # the whole choice again, among physically consistent fits
+                psel = select_model(robot, *tr, folds=inner, physical=True, **common)
+                pull = choose_prior_strength(robot, *tr, folds=inner, **common,
+                                             **psel.chosen)
+                ident = sj.identify(robot, *tr[1:], **common, **psel.chosen, physical=True,
+                                    prior_strength=pull.chosen)
+                pred = ident.predict(data.q[test], data.qd[test], data.qdd[test])
+                held[PHYSICAL].append(sj.validation_metrics(
+                    data.tau[test], pred, limits.torque_limits).nrms_limits_percent)
+                physical_per_fold.append({**psel.chosen, "prior_strength": pull.chosen})
         chosen_per_fold.append(sel.chosen)
     nested_s = time.perf_counter() - t0
     with warnings.catch_warnings():
@@ -110,6 +130,7 @@ def evaluate(name, robot, data, limits, transmission, runs, folds=5) -> dict:
         "nested_held_out_percent": {k: {"mean": float(np.mean(v)), "folds": v}
                                     for k, v in held.items()},
         "chosen_per_outer_fold": chosen_per_fold,
+        "physical_chosen_per_outer_fold": physical_per_fold or None,
         "chosen_on_all_data": full.chosen, "cv_of_chosen_percent": cv_chosen.score,
         "cv_standard_error": cv_chosen.standard_error,
         "fit_percent": final.fit["nrms_limits_percent"], "other_runs": other_runs,
@@ -122,16 +143,21 @@ def evaluate(name, robot, data, limits, transmission, runs, folds=5) -> dict:
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", default="benchmarks/results/real_robots.json")
+    ap.add_argument("--no-physical", action="store_true",
+                    help="leave out the physically consistent choice (the slow part)")
     args = ap.parse_args(argv)
     import tempfile
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, robot, data, limits, tr, runs in datasets(Path(tmp)):
-            rows.append(evaluate(name, robot, data, limits, tr, runs))
+            rows.append(evaluate(name, robot, data, limits, tr, runs,
+                                 physical=not args.no_physical))
             r = rows[-1]
+            phys = r["nested_held_out_percent"].get(PHYSICAL)
             print(f"{name}: chosen {r['chosen_on_all_data']}, CV {r['cv_of_chosen_percent']:.4f}"
-                  f" %, nested {r['nested_seconds']:.0f} s", flush=True)
+                  f" %, nested {r['nested_seconds']:.0f} s"
+                  + (f"; physical, nested {phys['mean']:.4f} %" if phys else ""), flush=True)
     print("\n| robot | held-out stretch, default (nested CV) | OLS Coulomb + viscous | "
           "previous default | default's choice on all data | its CV | other runs |")
     print("|---|---|---|---|---|---|---|")
