@@ -36,6 +36,8 @@ from sedsabso_jax.identification import identify, validation_metrics
 LIMITS = np.array([176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0])
 FIELDS = ("positions", "velocities", "accelerations", "torques")
 FULL = "viscous-coulomb+offset+quadratic+smooth"
+#: The swarms' box, iterations and seed.
+BOX = dict(box=(0.5, 0.5), iterations=600, seed=0)
 
 
 def data_dir() -> str:
@@ -49,19 +51,19 @@ def load(path):
 
 
 def configurations(swarms: bool, runs: int):
+    """(label, friction, estimator) rows."""
     rows = []
     for friction in ("viscous-coulomb", "viscous-coulomb+offset", FULL):
         rows += [
-            ("OLS", friction, dict(method="OLS")),
-            ("WLS (Gautier, residual std)", friction, dict(method="WLS")),
-            ("WLS (1/limit)", friction, dict(method="WLS", sigma="limits")),
-            ("L1 optimum (LP)", friction, dict(method="L1")),
-            ("L1 optimum (LP), 1/limit", friction, dict(method="L1", sigma="limits")),
-            ("LM (optimistix)", friction, dict(method="LM")),
-            ("physical, WLS (1/limit)", friction, dict(method="WLS", sigma="limits",
-                                                       physical=True)),
-            ("physical, OLS, prior weight 1", friction, dict(method="OLS", physical=True,
-                                                             prior_weight=1.0)),
+            ("OLS", friction, sj.OLS()),
+            ("WLS (Gautier, residual std)", friction, sj.WLS()),
+            ("WLS (1/limit)", friction, sj.WLS("limits")),
+            ("L1 optimum (LP)", friction, sj.L1()),
+            ("L1 optimum (LP), 1/limit", friction, sj.L1("limits")),
+            ("LM (optimistix)", friction, sj.LevenbergMarquardt()),
+            ("physical, WLS (1/limit)", friction, sj.PhysicallyConsistent(sj.WLS("limits"))),
+            ("physical, OLS, prior weight 1", friction,
+             sj.PhysicallyConsistent(sj.OLS(), prior_weight=1.0)),
         ]
     if swarms:
         slow = lambda s: eqx.tree_at(lambda z: z.vmax_fraction, s, 0.1)  # noqa: E731
@@ -69,11 +71,10 @@ def configurations(swarms: bool, runs: int):
                                   ("viscous-coulomb+offset", "limits")):
             for name in ("SEDSABSO", "BSO", "LDWPSO"):
                 rows.append((f"{name} (paper)", friction,
-                             dict(method=name, sigma=weights, runs=runs)))
+                             sj.Estimator.named(name, sigma=weights, runs=runs, **BOX)))
         for name, cls in (("SEDSABSO", sj.SEDSABSO), ("LDWPSO", sj.LDWPSO)):
             rows.append((f"{name}, Vmax = 0.1 (ub - lb)", "viscous-coulomb+offset",
-                         dict(method=name, sigma="limits", solver=slow(cls.paper()),
-                              runs=runs)))
+                         sj.BoxSearch(slow(cls.paper()), sigma="limits", runs=runs, **BOX)))
     return rows
 
 
@@ -91,13 +92,13 @@ def main(argv=None):
     base = sj.base_parameters(robot)
     train = load(os.path.join(args.data, "measurements_1.npz"))
     test = load(os.path.join(args.data, "measurements_2.npz"))
-    common = dict(base=base, limits=LIMITS, box=(0.5, 0.5), iterations=600, seed=0)
-    identify(robot, *train, **common)  # compile the regressor for this sample count
+    common = dict(base=base, limits=LIMITS)
+    identify(robot, train, **common)  # compile the regressor for this sample count
 
     rows = []
-    for label, friction, kw in configurations(not args.no_swarms, args.runs):
+    for label, friction, estimator in configurations(not args.no_swarms, args.runs):
         t0 = time.perf_counter()
-        ident = identify(robot, *train, friction=friction, **common, **kw)
+        ident = identify(robot, train, estimator, friction, **common)
         seconds = time.perf_counter() - t0
         tau_pred = ident.predict(*test[:3])
         metrics = validation_metrics(test[3], tau_pred, LIMITS)

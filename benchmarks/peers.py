@@ -163,9 +163,9 @@ def main():
     parser.add_argument("--json", default=None)
     args = parser.parse_args()
 
-    from swarms import problem  # benchmarks/swarms.py, run from this folder or with it on sys.path
+    from benchmarks.problems import rs010n_problem
 
-    prob, lo, hi, true = problem()
+    prob, lo, hi, true = rs010n_problem()
     W, tau = np.asarray(prob.W), np.asarray(prob.tau)
     rows = []
     evosax32 = lambda *a: evosax_row(*a, dtype="float32")  # noqa: E731

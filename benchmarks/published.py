@@ -293,8 +293,9 @@ def tx40(tmp: Path, nested: dict) -> dict:
     fits = {}
     for label, settings in (("figaroh_terms", FIGAROH_LIKE),
                             ("default_choice", ours["chosen_on_all_data"])):
-        ident = sj.identify(robot, data.q, data.qd, data.qdd, data.tau, limits=limits,
-                            base=base, transmission=tr, **settings)
+        estimator = sj.Estimator.named(settings["method"], sigma=settings["sigma"])
+        ident = sj.identify(robot, data, estimator, settings["friction"], limits=limits,
+                            base=base, transmission=tr)
         extra = {n: v for n, v in zip(ident.names, ident.values)
                  if re.fullmatch(r"(FV|FC|OFF|FQ|IA|FVM|FCM)\d+", n)}
         fits[label] = {"settings": settings, "fit_whole_run": ident.fit["nrms_limits_percent"],

@@ -34,20 +34,16 @@ import numpy as np
 
 import sedsabso_jax as sj
 from sedsabso_jax.dynamics.limits import joint_limits
-from sedsabso_jax.identification.validation import (
-    choose_prior_strength,
-    phase_folds,
-    select_model,
-)
+from sedsabso_jax.identification.validation import phase_folds
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "data"))
 import real_robots  # noqa: E402  (the repository's data folder)
 
 PHYSICAL = "physical, chosen by cross-validation (model and pull to the prior)"
 FIXED = {
-    "OLS, Coulomb + viscous": dict(method="OLS", friction="viscous-coulomb"),
+    "OLS, Coulomb + viscous": (sj.OLS(), "viscous-coulomb"),
     "previous default: WLS 1/limit, offset+quadratic+smooth":
-        dict(method="WLS", sigma="limits", friction="viscous-coulomb+offset+quadratic+smooth"),
+        (sj.WLS("limits"), "viscous-coulomb+offset+quadratic+smooth"),
 }
 
 
@@ -77,6 +73,12 @@ def subset(data, mask):
     return (data.times[mask], data.q[mask], data.qd[mask], data.qdd[mask], data.tau[mask])
 
 
+def fixed(robot, data, estimator, friction, limits, transmission, base):
+    """``identify`` with one of :data:`FIXED`."""
+    model = sj.TorqueModel.of(robot, friction, transmission=transmission, base=base)
+    return sj.identify(robot, data, estimator, model, limits=limits)
+
+
 def evaluate(name, robot, data, limits, transmission, runs, folds=5, physical=True) -> dict:
     base = sj.base_parameters(robot)
     common = dict(limits=limits.torque_limits, base=base, transmission=transmission)
@@ -92,39 +94,33 @@ def evaluate(name, robot, data, limits, transmission, runs, folds=5, physical=Tr
         tr = subset(data, train)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            sel = select_model(robot, *tr, folds=inner, **common)
-            fits = {"default (chosen by cross-validation)": sel.chosen, **FIXED}
-            for label, settings in fits.items():
-                ident = sj.identify(robot, *tr[1:], **common, **settings)
+            default = sj.select_and_identify(robot, tr, folds=inner, **common)
+            fits = {"default (chosen by cross-validation)": default.ident}
+            for label, (estimator, friction) in FIXED.items():
+                fits[label] = fixed(robot, tr[1:], estimator, friction, **common)
+            if physical:  # the whole choice again, among physically consistent fits
+                chosen = sj.select_and_identify(robot, tr, folds=inner, physical=True,
+                                                prior_strength="cv", **common)
+                fits[PHYSICAL] = chosen.ident
+                physical_per_fold.append({**chosen.selection.chosen,
+                                          "prior_strength": chosen.prior_selection.chosen})
+            for label, ident in fits.items():
                 pred = ident.predict(data.q[test], data.qd[test], data.qdd[test])
                 held[label].append(sj.validation_metrics(
                     data.tau[test], pred, limits.torque_limits).nrms_limits_percent)
-            if physical:  # the whole choice again, among physically consistent fits
-                psel = select_model(robot, *tr, folds=inner, physical=True, **common)
-                pull = choose_prior_strength(robot, *tr, folds=inner, **common,
-                                             **psel.chosen)
-                ident = sj.identify(robot, *tr[1:], **common, **psel.chosen, physical=True,
-                                    prior_strength=pull.chosen)
-                pred = ident.predict(data.q[test], data.qd[test], data.qdd[test])
-                held[PHYSICAL].append(sj.validation_metrics(
-                    data.tau[test], pred, limits.torque_limits).nrms_limits_percent)
-                physical_per_fold.append({**psel.chosen, "prior_strength": pull.chosen})
-        chosen_per_fold.append(sel.chosen)
+        chosen_per_fold.append(default.selection.chosen)
     nested_s = time.perf_counter() - t0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        full = select_model(robot, data.times, data.q, data.qd, data.qdd, data.tau,
-                            folds=folds, **common)
-        final = sj.identify(robot, data.q, data.qd, data.qdd, data.tau, **common,
-                            **full.chosen)
+        report = sj.select_and_identify(robot, data, folds=folds, **common)
+        full, final = report.selection, report.ident
         other_runs = {}
         for run, d in runs.items():
             other_runs[run] = {"default": nrms(final, d, limits)}
-            for label, settings in FIXED.items():
-                other_runs[run][label] = nrms(sj.identify(robot, data.q, data.qd, data.qdd,
-                                                          data.tau, **common, **settings),
+            for label, (estimator, friction) in FIXED.items():
+                other_runs[run][label] = nrms(fixed(robot, data, estimator, friction, **common),
                                               d, limits)
-    cv_chosen = next(cv for s, cv in full.candidates if s is full.chosen)
+    cv_chosen = full.cross_validation
     return {
         "robot": name, "samples": data.n_samples, "period_s": period,
         "nested_held_out_percent": {k: {"mean": float(np.mean(v)), "folds": v}

@@ -1,5 +1,5 @@
-"""Deprecated names: each keeps working for one release (0.2.x) with a DeprecationWarning
-that points at the caller's line and names the replacement."""
+"""Deprecated names and call forms: each keeps working through 0.3.x with a
+DeprecationWarning that points at the caller's line and names the replacement."""
 
 from __future__ import annotations
 
@@ -11,9 +11,10 @@ import warnings
 _INTERNAL = ("sedsabso_jax", "equinox")
 
 
-def _caller_stacklevel() -> int:
-    """The ``stacklevel`` of the first frame outside this package and equinox (whose
-    module metaclass stands between a constructor call and ``__init__``)."""
+def caller_stacklevel() -> int:
+    """The ``stacklevel`` (for a ``warnings.warn`` in the calling function) of the first
+    frame outside this package and equinox (whose module metaclass stands between a
+    constructor call and ``__init__``): the user's line."""
     frame, level = sys._getframe(1), 1
     while frame is not None and frame.f_globals.get("__name__", "").startswith(_INTERNAL):
         frame, level = frame.f_back, level + 1
@@ -22,8 +23,8 @@ def _caller_stacklevel() -> int:
 
 def warn(old: str, new: str) -> None:
     """Warn that ``old`` is deprecated in favour of ``new``."""
-    warnings.warn(f"{old} is deprecated and will be removed after sedsabso-jax 0.2; use {new}",
-                  DeprecationWarning, stacklevel=_caller_stacklevel())
+    warnings.warn(f"{old} is deprecated and will be removed after sedsabso-jax 0.3; use {new}",
+                  DeprecationWarning, stacklevel=caller_stacklevel())
 
 
 def renamed_arguments(cls, renamed: dict[str, str]):

@@ -6,11 +6,14 @@ from __future__ import annotations
 import os
 import zlib
 
+import jax
 import numpy as np
 import pytest
 from hypothesis import settings
 
-import sedsabso_jax  # noqa: F401  (turns on float64)
+# The package never turns on JAX's 64-bit mode itself (tests/test_global_state.py); the
+# tests, like its users, turn it on first.
+jax.config.update("jax_enable_x64", True)
 
 # Hypothesis draws the same examples on every run and keeps no example database, so a test
 # passes or fails the same way on every machine and in CI. HYPOTHESIS_PROFILE=explore draws

@@ -123,7 +123,7 @@ def test_armature_is_identified_from_simulated_data(rng):
     tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
     tau = tau + (qdd @ K.T * Ia) @ K  # K^T diag(Ia) K qdd
     with pytest.warns(UserWarning, match="IA1, IA2 cannot be identified apart"):
-        ident = sj.identify(robot, q, qd, qdd, tau, friction="armature", transmission=K)
+        ident = sj.identify(robot, (q, qd, qdd, tau), sj.OLS(), "armature", transmission=K)
     values = dict(zip(ident.names, ident.values))
     assert values["IA3"] == pytest.approx(3e-4, rel=1e-6)
     # the full model (all columns) predicts the torques exactly
@@ -158,19 +158,21 @@ def test_selection_finds_the_torque_offset_and_rejects_extra_terms(rng):
     t = np.arange(2000) / 100.0  # two periods
     data = sj.simulate_measurements_along(robot, traj, t, torque_noise=0.01, seed=3)
     tau = data.tau + np.array([5.0, -3.0, 2.0])
-    sel = select_model(robot, t, data.q, data.qd, data.qdd, tau,
-                       weightings=(("OLS", None),))
+    recording = (t, data.q, data.qd, data.qdd, tau)
+    sel = select_model(robot, recording, estimators=sj.OLS())
     assert sel.chosen["friction"] == "viscous-coulomb+offset"
+    assert sel.model.friction == "viscous-coulomb+offset" and sel.estimator == sj.OLS()
+    assert sel.cross_validation is dict(
+        (s["friction"], cv) for s, cv in sel.candidates)["viscous-coulomb+offset"]
     scores = {s["friction"]: cv for s, cv in sel.candidates}
     assert scores["viscous-coulomb+offset"].score < 0.5 * scores["viscous-coulomb"].score
     assert scores["viscous-coulomb+offset"].period_s == pytest.approx(10.0, abs=0.05)
-    cv = cross_validate(robot, t, data.q, data.qd, data.qdd, tau, folds=5,
-                        friction="offset")
+    cv = cross_validate(robot, recording, sj.OLS(), "offset", folds=5)
     assert cv.score == pytest.approx(scores["viscous-coulomb+offset"].score)
     assert cv.measure == "relative_rms_percent" and len(cv.fold_scores) == 5
     assert 0.8 < cv.score < 1.5  # about the 1 % noise: the model generalises
     with pytest.raises(ValueError, match="fold labels must be integers"):
-        cross_validate(robot, t, data.q, data.qd, data.qdd, tau, folds=np.zeros(3, int))
+        cross_validate(robot, recording, folds=np.zeros(3, int))
 
 
 def _rs010n_run(n, amplitude, noise, seed=1):
@@ -192,24 +194,26 @@ def test_prior_strength_follows_what_the_data_can_say():
     error, not the lowest. Rich clean data and a prior whose masses are doubled: a
     negligible pull at most, and a strong one several times worse."""
     robot, t, d = _rs010n_run(60, 0.1, 0.1)
-    sel = choose_prior_strength(robot, t, d.q, d.qd, d.qdd, d.tau)
+    sel = choose_prior_strength(robot, d)
     cv = dict(sel.candidates)
     assert sel.best == sel.chosen == 1.0 and cv[1.0].score < cv[0.0].score
+    assert sel.estimator == sj.PhysicallyConsistent(prior_strength=1.0)
     # torque noise (30 %) drowns the differences: every strength is within one standard
     # error of the lowest (1e-3 here), and the rule keeps the strongest pull
     robot, t, d = _rs010n_run(1000, 0.05, 0.3, seed=0)
-    sel = choose_prior_strength(robot, t, d.q, d.qd, d.qdd, d.tau)
+    sel = choose_prior_strength(robot, d)
     assert sel.best != 1.0 and sel.chosen == 1.0
     robot, t, d = _rs010n_run(1000, 0.3, 0.01, seed=0)
     wrong = np.asarray(robot.params) * np.tile(np.r_[np.ones(6), 2.0, np.ones(5)], 3)
-    sel = choose_prior_strength(robot, t, d.q, d.qd, d.qdd, d.tau, prior=wrong)
+    sel = choose_prior_strength(robot, d, sj.PhysicallyConsistent(prior=wrong))
     cv = dict(sel.candidates)
     assert sel.chosen <= 1e-6 and cv[1.0].score > 5 * cv[sel.chosen].score
     assert sel.as_dict()["candidates"][0]["prior_strength"] == 0.0
-    with pytest.raises(ValueError, match="method 'OLS' or 'WLS'"):
-        choose_prior_strength(robot, t, d.q, d.qd, d.qdd, d.tau, method="L1")
+    with pytest.raises(ValueError, match=r"physically consistent least-squares fit: "
+                                         r"PhysicallyConsistent\(\.\.\.\) \(of OLS or WLS\)"):
+        choose_prior_strength(robot, d, sj.L1())
     with pytest.raises(ValueError, match="strengths must be numbers >= 0"):
-        choose_prior_strength(robot, t, d.q, d.qd, d.qdd, d.tau, strengths=(0.0, -1.0))
+        choose_prior_strength(robot, d, strengths=(0.0, -1.0))
 
 
 # ------------------------------------------------------------------- real robots

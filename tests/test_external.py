@@ -85,7 +85,7 @@ def test_bad_strategy_settings():
         sj.minimise(sphere, Evosax("PSO", params={"inertia": 0.5}), LO, HI,
                     key=jax.random.key(0), iterations=2)
     with pytest.raises(ValueError, match="population_size must be an integer >= 1"):
-        Evosax("PSO", population_size=0).check()
+        Evosax("PSO", population_size=0)
     # a parameter that exists is used: PSO without inertia or pulls does not move
     still = Evosax("PSO", params={"inertia_coeff": 0.0, "cognitive_coeff": 0.0,
                                   "social_coeff": 0.0})

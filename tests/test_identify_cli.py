@@ -220,7 +220,6 @@ def test_prior_strength_chosen_by_cross_validation(rs010n_files, tmp_path, capsy
     choice and its table in the JSON and the text; the grid is the library's."""
     from sedsabso_jax.identification.validation import PRIOR_STRENGTHS
 
-    assert cli.PRIOR_STRENGTHS == PRIOR_STRENGTHS
     js = tmp_path / "r.json"
     assert cli.main(["identify", "--robot", "rs010n", "--data", rs010n_files[0], "--method",
                      "OLS", "--friction", "viscous-coulomb", "--physical",
@@ -237,3 +236,68 @@ def test_prior_strength_chosen_by_cross_validation(rs010n_files, tmp_path, capsy
     assert chosen["chosen"] <= 1e-6 and scores[1:] == sorted(scores[1:])
     assert scores[-1] > 2 * min(scores)
     assert "pull toward the a-priori parameters" in capsys.readouterr().out
+
+
+def _without_times(value):
+    """A JSON document without the wall times (``seconds``, ``compile_s``, ``run_s``)."""
+    if isinstance(value, dict):
+        return {k: _without_times(v) for k, v in value.items()
+                if k not in ("seconds", "compile_s", "run_s")}
+    if isinstance(value, list):
+        return [_without_times(v) for v in value]
+    return value
+
+
+@pytest.mark.parametrize("flags, call", [
+    ([], {}),
+    (["--physical", "--method", "OLS", "--weights", "equal", "--friction", "offset",
+      "--prior-strength", "1e-3"],
+     dict(estimators=sj.OLS(), frictions="viscous-coulomb+offset", physical=True,
+          prior_strength=1e-3)),
+], ids=["default", "physical"])
+def test_the_command_is_one_library_call(flags, call, rs010n_files, tmp_path, capsys):
+    """``sedsabso-jax identify`` prints and writes the report of
+    ``sj.select_and_identify`` called with the objects its flags stand for."""
+    js = tmp_path / "r.json"
+    assert cli.main(["identify", "--robot", "rs010n", "--data", rs010n_files[0],
+                     "--validate", rs010n_files[1], *flags, "--json", str(js)]) == 0
+    printed = capsys.readouterr().out
+    doc = json.loads(js.read_text())
+    data, held_out = (sj.load_measurements(p, n_joints=3) for p in rs010n_files)
+    report = sj.select_and_identify(sj.robots.rs010n(), data, held_out=held_out, **call)
+    assert printed == f"{report.text()}\nwritten: {js}\n"
+    cli_settings = {k: doc["settings"][k] for k in ("robot", "data", "validate",
+                                                     "torque_limits", "loading", "motor_side")}
+    assert _without_times(doc) == _without_times(report.document(cli_settings))
+    assert (report.selection is None) == bool(call)
+
+
+def test_select_and_identify_checks_its_arguments(rs010n_files):
+    robot = sj.robots.rs010n()
+    data = sj.load_measurements(rs010n_files[0], n_joints=3)
+    for kwargs, match in [(dict(prior_strength=1e-3), "prior_strength needs physical=True"),
+                          (dict(folds=0), "folds=0 turns cross-validation off"),
+                          (dict(physical=True, estimators=sj.L1()), "physical=True is a "
+                           "least-squares fit: use method 'OLS' or 'WLS', not 'L1'"),
+                          (dict(physical=True, prior_strength="cv", folds=0,
+                                estimators=sj.OLS(), frictions="offset"),
+                           "prior_strength='cv' chooses by cross-validation")]:
+        with pytest.raises(ValueError, match=match):
+            sj.select_and_identify(robot, data, **kwargs)
+
+
+def test_estimator_candidates_are_the_commands_policy():
+    """--method and --weights to candidates: OLS / WLS by default, a fixed method with each
+    weighting (WLS's None is its residual weighting), a box search alone (costly)."""
+    from sedsabso_jax.identification import estimator_candidates as candidates
+
+    assert candidates() == (sj.OLS(), sj.WLS("residual"), sj.WLS("limits"))
+    assert candidates(sigma="equal") == (sj.OLS(),)
+    assert candidates(sigma="limits") == (sj.WLS("limits"),)
+    assert candidates("L1") == (sj.L1(), sj.L1("residual"), sj.L1("limits"))
+    assert candidates("WLS") == (sj.WLS("residual"), sj.WLS("limits"))
+    assert candidates("LM", "residual", runs=3) == (sj.LevenbergMarquardt("residual"),)
+    assert candidates("SEDSABSO", runs=2, iterations=9, seed=4) == (
+        sj.BoxSearch(sj.SEDSABSO.paper(), runs=2, iterations=9, seed=4),)
+    with pytest.raises(ValueError, match="sigma must be 'auto'"):
+        candidates("OLS", "robust")

@@ -7,6 +7,7 @@ the random draws, and computes the state after it."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import jax
@@ -62,10 +63,12 @@ def _with(s, fitness, antenna=A, **changes):
 
 
 def step(solver, fitness, s, t, lo, hi, randomness, iterations=10):
-    """One iteration from an iteration's randomness (what ``solver.randomness`` gives:
-    keys, or for SEDSABSO ``(keys, r, u)``), drawn for the state's population."""
+    """Iteration ``t`` of ``iterations`` from an iteration's randomness (what
+    ``solver.randomness`` gives: keys, or for SEDSABSO ``(keys, r, u)``), drawn for the
+    state's population."""
     draws = solver.draw(randomness, s.x.shape, s.x.dtype)
-    return solver.step(fitness, s, t, iterations, jnp.asarray(lo), jnp.asarray(hi), draws)
+    s = dataclasses.replace(s, t=jnp.int32(t), iterations=iterations)
+    return solver.update(fitness, s, draws, jnp.asarray(lo), jnp.asarray(hi))
 
 
 def as_numpy(s) -> dict:
@@ -187,7 +190,7 @@ def test_antennae_sit_at_half_the_distance_delta_over_c():
     fitness = sj.BlackBox(lambda x, args: jnp.cos(100.0 * x[0]))
     lo, hi = jnp.full(1, -1.0), jnp.full(1, 1.0)
     solver = sj.BSO(n_beetles=1, w=1.0, lam=0.0)  # the antenna step alone; V stays 1
-    s = solver.init(fitness, lo, hi, jax.random.key(0))
+    s = solver.init(fitness, lo, hi, jax.random.key(0), 10)
     # the antennae as the solver places them (solver.antenna), at x = 0.01, V = 1
     s = _with(s, fitness, antenna=solver.antenna, x=np.full((1, 1), 0.01), v=np.ones((1, 1)),
               active=np.array([True]))

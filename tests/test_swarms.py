@@ -240,7 +240,9 @@ def test_runs_shard_over_devices():
     """Four CPU devices (XLA flag, in a subprocess): runs are spread over them and give
     the numbers of the unsharded run."""
     code = textwrap.dedent("""
-        import jax, numpy as np, jax.numpy as jnp, sedsabso_jax as sj
+        import jax, numpy as np, jax.numpy as jnp
+        jax.config.update("jax_enable_x64", True)
+        import sedsabso_jax as sj
         assert len(jax.devices()) == 4
         f = lambda x, a: jnp.sum(x ** 2)
         kw = dict(lower=-np.ones(3), upper=np.ones(3), key=jax.random.key(0), iterations=50, runs=6)

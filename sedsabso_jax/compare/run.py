@@ -127,14 +127,14 @@ def solver_for(name: str):
 
 
 def label(name: str) -> str:
-    """How an algorithm is named in reports."""
-    return name if name in SWARMS else f"evosax {name.removeprefix('evosax:')}"
+    """How an algorithm is named in reports: its solver's label."""
+    return solver_for(name).label
 
 
 def check_dimensions(settings: Settings, dims) -> None:
     """Every algorithm can run in every dimension within the budget: one generation fits
-    and an evosax strategy traces (nothing is compiled; the swarms take any dimension).
-    Raises ValueError naming the algorithm and the dimension."""
+    and a run of two iterations traces (nothing is compiled). Raises ValueError naming
+    the algorithm and the dimension."""
     for name in settings.algorithms:
         solver = solver_for(name)
         for d in sorted(set(dims)):
@@ -142,8 +142,6 @@ def check_dimensions(settings: Settings, dims) -> None:
                 iterations_for_budget(solver, settings.evaluations(d), d)
             except ValueError as err:
                 raise ValueError(f"{label(name)}: {err} (--budget {settings.budget})") from None
-            if not isinstance(solver, Evosax):
-                continue
             lower, upper = np.zeros(d), np.ones(d)
             f = BlackBox(lambda x, a: (x ** 2).sum())
             try:
@@ -155,9 +153,8 @@ def check_dimensions(settings: Settings, dims) -> None:
                                  ) from None
 
 
-def _trace(solver: Evosax, fitness, lower, upper, key):
-    return solver.single_run(fitness, jax.numpy.asarray(lower), jax.numpy.asarray(upper),
-                             key, 2)
+def _trace(solver, fitness, lower, upper, key):
+    return solver.run(fitness, jax.numpy.asarray(lower), jax.numpy.asarray(upper), key, 2)
 
 
 def _key(settings: Settings, problem: str, algorithm: str, instance: int):

@@ -7,6 +7,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from .. import _x64
+
 #: Per-link parameter order (the paper's Eq. 3 order), suffixed by the link number.
 LINK_PARAMETERS = ("XX", "YY", "ZZ", "XY", "XZ", "YZ", "M", "MX", "MY", "MZ", "FC", "FV")
 #: Number of parameters per link: 10 inertial + Coulomb + viscous friction.
@@ -16,6 +18,7 @@ STANDARD_GRAVITY = (0.0, 0.0, -9.81)
 
 
 def _f64(x) -> Array:
+    _x64.require("a robot model (its geometry and parameters)")
     return jnp.asarray(x, dtype=jnp.float64)
 
 
@@ -155,6 +158,8 @@ def joint_arrays(robot: Robot, *named_arrays: tuple[str, object], dtype=jnp.floa
     Leading (batch) axes must broadcast against each other; the broadcast arrays are
     returned.
     """
+    if jnp.dtype(dtype) == jnp.float64:
+        _x64.require("the regressor in float64 (its default)")
     n = robot.n_joints
     arrays = []
     for name, value in named_arrays:

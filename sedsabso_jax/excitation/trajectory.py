@@ -29,6 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from .. import _x64
 from .._output import atomic_write
 
 #: The default fundamental frequency of :func:`~sedsabso_jax.design_excitation` [rad/s]:
@@ -43,6 +44,7 @@ def _concrete(x) -> bool:
 
 
 def _float_array(name: str, value, ndim: int) -> Array:
+    _x64.require("an excitation trajectory")
     if isinstance(value, jax.core.Tracer):
         arr = value.astype(jnp.float64) if jnp.issubdtype(value.dtype, jnp.number) else value
     else:

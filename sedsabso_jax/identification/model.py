@@ -26,11 +26,17 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import numbers
 
 import numpy as np
 
 from .. import _deprecation
-from ..dynamics.base_parameters import RANK_TOLERANCE, BaseParameters, random_states
+from ..dynamics.base_parameters import (
+    RANK_TOLERANCE,
+    BaseParameters,
+    base_parameters,
+    random_states,
+)
 from ..dynamics.robot import N_LINK_PARAMETERS, Robot
 from ..measurements.transmission import coupled_motors
 
@@ -47,7 +53,8 @@ class TorqueModel:
     module docstring); ``transmission`` is ``K`` (``n x n``) or None.
 
     ``regressor(q, qd, qdd)`` is ``(..., n, d)`` with ``d`` = :attr:`dim`;
-    ``predict(values, q, qd, qdd)`` is ``regressor @ values``.
+    ``predict(values, q, qd, qdd)`` is ``regressor @ values``. :meth:`of` builds one from
+    a robot.
     """
 
     base: BaseParameters
@@ -67,9 +74,43 @@ class TorqueModel:
             raise ValueError("friction term 'coupling' needs a transmission with a motor that "
                              "turns several joints (a coupling)")
 
+    @classmethod
+    def of(cls, robot: Robot, friction: str = "viscous-coulomb", *, transmission=None,
+           smooth_velocity: float = SMOOTH_VELOCITY,
+           base: BaseParameters | None = None) -> TorqueModel:
+        """The model of ``robot`` with the ``friction`` terms (``"viscous-coulomb"`` plus
+        any of ``"+offset"``, ``"+quadratic"``, ``"+smooth"``, ``"+armature"``,
+        ``"+coupling"``, in any order), ``transmission`` (a
+        :class:`~sedsabso_jax.measurements.transmission.Transmission` or its matrix ``K``)
+        for the armature and coupling terms, the smooth Coulomb term's velocity scale, and
+        ``base``, a precomputed ``base_parameters(robot)`` (computed when None)."""
+        if not isinstance(robot, Robot):
+            raise TypeError(f"robot must be a sedsabso_jax.Robot, got {type(robot).__name__}")
+        friction = canonical_friction(friction)
+        if isinstance(smooth_velocity, bool) or not isinstance(smooth_velocity, numbers.Real) \
+                or not (np.isfinite(smooth_velocity) and smooth_velocity > 0):
+            raise ValueError(f"smooth_velocity must be > 0, got {smooth_velocity!r}")
+        if base is None:
+            base = base_parameters(robot)
+        elif not isinstance(base, BaseParameters) or base.robot.n_params != robot.n_params:
+            raise ValueError("base must be base_parameters(robot) of this robot")
+        return cls(base, friction, float(smooth_velocity),
+                   getattr(transmission, "matrix", transmission))
+
     @property
     def robot(self) -> Robot:
         return self.base.robot
+
+    def settings(self) -> dict:
+        """What the reports write about the model besides its friction terms."""
+        out = {}
+        if self.transmission is not None:
+            out["transmission"] = self.transmission
+        if self.regrouped:
+            out["regrouped"] = list(self.regrouped)
+        if "smooth" in self.terms:
+            out["smooth_velocity"] = float(self.smooth_velocity)
+        return out
 
     @property
     def terms(self) -> tuple[str, ...]:

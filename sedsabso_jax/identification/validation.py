@@ -12,7 +12,7 @@ A recording that does not repeat has phase = time, and the folds are contiguous 
 :func:`cross_validate` fits on ``K - 1`` folds and predicts the held-out one, ``K`` times;
 the out-of-fold predictions are compared with the measured torques (NRMS over the torque
 limits where they are known, else the relative RMS). :func:`select_model` cross-validates a
-grid of torque models and weightings and keeps the simplest that is not worse than the
+grid of torque models and estimators and keeps the simplest that is not worse than the
 best by more than one standard error (the one-standard-error rule: Hastie, Tibshirani &
 Friedman, *The Elements of Statistical Learning*, 2009, Sec. 7.10), with the standard
 error taken of the PAIRED fold-by-fold differences to the best: the folds differ in
@@ -22,7 +22,13 @@ every fold of the KUKA LWR4+ data). Excesses below 1 % of the best error
 (:data:`TIE_FRACTION`) count as ties, so a model is not made more complex for a gain no
 one could use. Nothing here looks at held-out files: they are for judging the choice,
 never for making it.
+
+Each takes the data as a :class:`~sedsabso_jax.Measurements` or ``(times, q, qd, qdd,
+tau)``, estimator objects (:mod:`.estimators`) and torque models (a
+:class:`~.model.TorqueModel` or friction terms). 0.2's forms ``(robot, times, q, qd, qdd,
+tau, **identify_settings)`` keep working through 0.3.x with a ``DeprecationWarning``.
 """
+
 
 from __future__ import annotations
 
@@ -30,168 +36,112 @@ import dataclasses
 
 import numpy as np
 
+from .. import _deprecation
 from ..dynamics.base_parameters import base_parameters
 from ..measurements.transmission import coupled_motors
-from .identify import check_data, fit_regressor, prepare
-from .metrics import Metrics, validation_metrics
+from .estimators import OLS, WLS, PhysicallyConsistent
+from .fitting import Estimator, per_joint
+from .folds import DEFAULT_FOLDS as DEFAULT_FOLDS
+from .folds import REPEAT_CORRELATION as REPEAT_CORRELATION
+from .folds import TIE_FRACTION as TIE_FRACTION
+from .folds import CrossValidation as CrossValidation
+from .folds import cross_validation_of, fold_labels, not_worse
+from .folds import phase_folds as phase_folds
+from .folds import repeat_period as repeat_period
+from .identify import data_arrays, torque_model
+from .legacy import estimator_from, from_keywords
+from .model import SMOOTH_VELOCITY, TorqueModel
 
-#: Folds of :func:`cross_validate` unless told otherwise.
-DEFAULT_FOLDS = 5
-#: A lag whose normalised autocorrelation reaches this is a repeat of the motion.
-REPEAT_CORRELATION = 0.95
-#: Excess errors below this fraction of the best cross-validated error are ties: a model
-#: is not made more complex for less.
-TIE_FRACTION = 0.01
 #: The candidate torque models of :func:`select_model`, simplest first.
 FRICTION_CANDIDATES = ("viscous-coulomb", "viscous-coulomb+offset",
                        "viscous-coulomb+offset+armature",
                        "viscous-coulomb+offset+quadratic+smooth")
-#: The candidate weightings: (method, sigma), simplest first.
-WEIGHTING_CANDIDATES = (("OLS", None), ("WLS", "residual"), ("WLS", "limits"))
+#: The candidate estimators of :func:`select_model` (their weightings), simplest first.
+ESTIMATOR_CANDIDATES = (OLS(), WLS("residual"), WLS("limits"))
+#: 0.2's form of :data:`ESTIMATOR_CANDIDATES`: (method, sigma) pairs.
+WEIGHTING_CANDIDATES = tuple((e.name, e.sigma) for e in ESTIMATOR_CANDIDATES)
 #: The candidate pulls of a physically consistent fit toward the a-priori parameters
 #: (:func:`choose_prior_strength`; multiples of the data term's mean curvature), none first.
 PRIOR_STRENGTHS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)
 
 
-def repeat_period(times, q, *, correlation: float = REPEAT_CORRELATION) -> float | None:
-    """The period [s] after which the positions ``q (T, n)`` repeat (the lag of highest
-    normalised autocorrelation between 10 % and 90 % of the recording, if it reaches
-    ``correlation``), or None when the motion does not repeat."""
-    times, q = np.asarray(times, dtype=float), np.asarray(q, dtype=float)
-    step = max(1, len(times) // 1500)  # the motion is slow: a coarse grid finds the period
-    t, x = times[::step], q[::step]
-    x = (x - x.mean(0)) / np.where(x.std(0) > 0, x.std(0), 1.0)
-    T = len(t)
-    best, lag_best = -np.inf, None
-    for lag in range(max(1, T // 10), max(2, 9 * T // 10)):
-        a, b = x[:-lag], x[lag:]
-        r = np.sum(a * b) / np.sqrt(np.sum(a * a) * np.sum(b * b))
-        if r > best:
-            best, lag_best = r, lag
-    if lag_best is None or best < correlation:
-        return None
-    return float(t[lag_best] - t[0])
+def _old_form(what: str, data, positional: tuple, count: int):
+    """0.2's ``what(robot, times, q, qd, qdd, tau, **settings)``: the data tuple, with a
+    warning."""
+    if positional:
+        if len(positional) != count:
+            raise TypeError(f"{what}() takes (robot, data, ...), or 0.2's (robot, times, q, "
+                            f"qd, qdd, tau, ...)")
+        data = (data, *positional)
+    _deprecation.warn(f"{what}(robot, times, q, qd, qdd, tau, method=..., friction=..., ...)",
+                      f"{what}(robot, data, ...) with estimator objects and torque models")
+    return data
 
 
-def phase_folds(times, q, folds: int = DEFAULT_FOLDS) -> tuple[np.ndarray, float | None]:
-    """``(fold of each sample, period)``: folds of the trajectory's phase (module
-    docstring); contiguous blocks when the motion does not repeat (period None)."""
-    times = np.asarray(times, dtype=float)
-    if not isinstance(folds, (int, np.integer)) or isinstance(folds, bool) or folds < 2:
-        raise ValueError(f"folds must be an integer >= 2, got {folds!r}")
-    period = repeat_period(times, q)
-    span = period if period is not None else (times[-1] - times[0]) * (1 + 1e-12)
-    phase = np.mod((times - times[0]) / span, 1.0)
-    return np.minimum((phase * folds).astype(int), folds - 1), period
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class CrossValidation:
-    """Out-of-fold predictions of one identification setting and their errors.
-
-    Attributes:
-        metrics: :class:`~.metrics.Metrics` of all out-of-fold predictions together.
-        fold_scores: the error of each fold (NRMS over the limits %, else relative RMS %).
-        score: their mean, the cross-validated error; ``standard_error`` its standard
-            error over the folds.
-        period_s: the repeat period the folds follow (None: contiguous blocks).
-        folds: the fold of each sample; ``n_parameters``: the model's parameters.
-    """
-
-    metrics: Metrics
-    fold_scores: np.ndarray
-    period_s: float | None
-    folds: np.ndarray
-    n_parameters: int
-    settings: dict
-
-    @property
-    def score(self) -> float:
-        return float(np.mean(self.fold_scores))
-
-    @property
-    def standard_error(self) -> float:
-        k = len(self.fold_scores)
-        return float(np.std(self.fold_scores, ddof=1) / np.sqrt(k)) if k > 1 else 0.0
-
-    @property
-    def measure(self) -> str:
-        return ("nrms_limits_percent" if self.metrics.nrms_limits_percent is not None
-                else "relative_rms_percent")
-
-    def as_dict(self) -> dict:
-        return {"measure": self.measure, "score": self.score,
-                "standard_error": self.standard_error, "fold_scores": self.fold_scores,
-                "folds": len(self.fold_scores), "period_s": self.period_s,
-                "n_parameters": self.n_parameters, "settings": self.settings,
-                "metrics": self.metrics.as_dict()}
-
-
-def _score(metrics: Metrics) -> float:
-    if metrics.nrms_limits_percent is not None:
-        return metrics.nrms_limits_percent
-    return metrics.relative_rms_percent_overall
-
-
-def _folds_of(robot, times, q, qd, qdd, tau, folds):
-    """Checked arrays, the fold of each sample and the period: phase folds for an int
-    ``folds``, or ``folds`` itself as given labels ``0..K-1`` (one per sample)."""
-    q, qd, qdd, tau = check_data(robot, q, qd, qdd, tau)
-    times = np.asarray(times, dtype=float)
-    if times.shape != (q.shape[0],):
-        raise ValueError(f"times must have one entry per sample ({q.shape[0]}), got shape "
-                         f"{times.shape}")
-    if np.ndim(folds) == 1:
-        labels, period = np.asarray(folds), None
-        if labels.shape != times.shape or labels.dtype.kind not in "iu" or labels.min() < 0:
-            raise ValueError(f"fold labels must be integers >= 0, one per sample "
-                             f"({times.shape[0]}), got shape {labels.shape}")
-        folds = int(labels.max()) + 1
-        if folds < 2:
-            raise ValueError("fold labels must name at least 2 folds")
-    else:
-        labels, period = phase_folds(times, q, folds)
-    for k in range(folds):
-        if not np.any(labels == k):
-            raise ValueError(f"fold {k + 1} of {folds} is empty: the recording is too short "
-                             f"for {folds} folds")
+def _recording(robot, data, folds):
+    """Checked ``(times, q, qd, qdd, tau)`` of ``data``, the fold labels and the period."""
+    times, q, qd, qdd, tau = data_arrays(robot, data, times=True)
+    labels, period = fold_labels(times, q, folds)
     return (q, qd, qdd, tau), labels, period
 
 
-def _cross_validate(setup, Y, tau, labels, period, sigma) -> CrossValidation:
-    folds = int(labels.max()) + 1
-    predicted = np.zeros_like(tau)
-    scores = []
-    for k in range(folds):
-        test = labels == k
-        fit = fit_regressor(setup, Y[~test], tau[~test], warn=False)
-        predicted[test] = Y[test] @ fit.x
-        scores.append(_score(validation_metrics(tau[test], predicted[test], setup.limits)))
-    return CrossValidation(
-        metrics=validation_metrics(tau, predicted, setup.limits),
-        fold_scores=np.asarray(scores), period_s=period, folds=labels,
-        n_parameters=setup.model.dim, settings={**setup.settings(), "sigma": sigma})
+def cross_validate(robot, data, estimator: Estimator = OLS(), model=None, *old_args,
+                   folds=DEFAULT_FOLDS, limits=None, transmission=None, base=None,
+                   smooth_velocity: float = SMOOTH_VELOCITY, **old_keywords
+                   ) -> CrossValidation:
+    """Cross-validate :func:`~.identify.identify` ``(robot, data, estimator, model)`` over
+    ``folds`` phase folds of the recording (module docstring), or over given fold labels
+    (an integer array, one per sample). ``limits``, ``transmission``, ``base`` and
+    ``smooth_velocity`` as in :func:`~.identify.identify`."""
+    if old_args or old_keywords:
+        data = _old_form("cross_validate", data, (estimator, model, *old_args), 4)
+        estimator, model = from_keywords(robot, old_keywords, transmission=transmission,
+                                         base=base, smooth_velocity=smooth_velocity)
+        transmission, base, smooth_velocity = None, None, SMOOTH_VELOCITY
+    model = torque_model(robot, model, transmission=transmission, base=base,
+                         smooth_velocity=smooth_velocity)
+    limits = per_joint("limits", limits, robot.n_joints)
+    _check_estimator(estimator).check(model, limits)
+    (q, qd, qdd, tau), labels, period = _recording(robot, data, folds)
+    return cross_validation_of(estimator, model, model.regressor(q, qd, qdd), tau, limits,
+                               labels, period)
 
 
-def cross_validate(robot, times, q, qd, qdd, tau, *, folds=DEFAULT_FOLDS,
-                   **settings) -> CrossValidation:
-    """Cross-validate :func:`~.identify.identify` with ``settings`` (its keyword arguments)
-    over ``folds`` phase folds of the recording (module docstring), or over given fold
-    labels (an integer array, one per sample)."""
-    (q, qd, qdd, tau), labels, period = _folds_of(robot, times, q, qd, qdd, tau, folds)
-    setup = prepare(robot, warn=False, **settings)
-    return _cross_validate(setup, setup.model.regressor(q, qd, qdd), tau, labels, period,
-                           settings.get("sigma"))
+def _check_estimator(estimator):
+    if not isinstance(estimator, Estimator):
+        raise TypeError(f"estimator must be an Estimator (OLS(), WLS(...), L1(), "
+                        f"BoxSearch(...), ...), got {estimator!r}")
+    return estimator
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Selection:
     """What :func:`select_model` returns: every candidate's cross-validation (in the order
-    tried) and the chosen one's settings (``identify`` keyword arguments)."""
+    tried) as ``(settings, cross-validation)`` pairs, where ``settings`` is ``{"method",
+    "sigma", "friction"}``; the chosen and the lowest candidate's settings; ``options``
+    the ``(estimator, model)`` of each candidate. :attr:`estimator` and :attr:`model` are
+    the chosen ones: ``identify(robot, data, sel.estimator, sel.model)`` fits it."""
 
     candidates: tuple[tuple[dict, CrossValidation], ...]
     chosen: dict
     best: dict
+    options: tuple[tuple[Estimator, TorqueModel], ...] = ()
+
+    def _index(self, settings) -> int:
+        return next(i for i, (s, _) in enumerate(self.candidates) if s is settings)
+
+    @property
+    def estimator(self) -> Estimator:
+        return self.options[self._index(self.chosen)][0]
+
+    @property
+    def model(self) -> TorqueModel:
+        return self.options[self._index(self.chosen)][1]
+
+    @property
+    def cross_validation(self) -> CrossValidation:
+        """The chosen candidate's cross-validation."""
+        return self.candidates[self._index(self.chosen)][1]
 
     def table(self) -> list[list[str]]:
         """Rows ``[method, sigma, friction, parameters, CV error +- SE, chosen]``."""
@@ -212,50 +162,87 @@ class Selection:
                 "candidates": [{"settings": s, **cv.as_dict()} for s, cv in self.candidates]}
 
 
-def select_model(robot, times, q, qd, qdd, tau, *, frictions=None, weightings=None,
-                 folds=DEFAULT_FOLDS, **settings) -> Selection:
-    """Choose the friction terms and the weighting by cross-validation (module
-    docstring). ``frictions`` (default :data:`FRICTION_CANDIDATES`) and ``weightings``
-    (``(method, sigma)`` pairs, default :data:`WEIGHTING_CANDIDATES`; those needing torque
-    limits are skipped without ``limits``) are the grid; ``settings`` go to every fit
-    (``limits``, ``transmission``, ``base``, ``physical``, ...). A transmission with a
-    coupled motor adds the ``coupling`` term to every candidate."""
-    frictions = tuple(FRICTION_CANDIDATES if frictions is None else frictions)
-    weightings = tuple(WEIGHTING_CANDIDATES if weightings is None else weightings)
-    if settings.get("limits") is None:
-        weightings = tuple(w for w in weightings if w[1] != "limits")
-    if not frictions or not weightings:
-        raise ValueError("select_model needs at least one friction model and one weighting")
-    K = getattr(settings.get("transmission"), "matrix", settings.get("transmission"))
+def select_model(robot, data, *old_args, estimators=None, frictions=None,
+                 folds=DEFAULT_FOLDS, limits=None, transmission=None, base=None,
+                 smooth_velocity: float = SMOOTH_VELOCITY, progress=None, weightings=None,
+                 **old_keywords) -> Selection:
+    """Choose the torque model and the estimator by cross-validation (module docstring).
+
+    ``estimators`` (default :data:`ESTIMATOR_CANDIDATES`; those weighting by the torque
+    limits are skipped without ``limits``) and ``frictions`` (default
+    :data:`FRICTION_CANDIDATES`: friction strings, or TorqueModels) are the grid, simplest
+    first; a ``transmission`` with a coupled motor adds the ``coupling`` term to every
+    friction string. ``progress(label, done, total)`` is called after each candidate.
+    0.2's ``weightings`` ((method, sigma) pairs) and keyword settings (``physical``, ...)
+    keep working, deprecated."""
+    if old_args or old_keywords or weightings is not None:
+        if old_args or old_keywords:
+            data = _old_form("select_model", data, old_args, 4)
+        else:
+            _deprecation.warn("select_model(weightings=...)", "estimators=(OLS(), ...)")
+        estimators = tuple(estimator_from(robot, method=m, sigma=s, **old_keywords)
+                           for m, s in (weightings or WEIGHTING_CANDIDATES))
+    estimators = ESTIMATOR_CANDIDATES if estimators is None else (
+        (estimators,) if isinstance(estimators, Estimator) else tuple(estimators))
+    frictions = FRICTION_CANDIDATES if frictions is None else (
+        (frictions,) if isinstance(frictions, (str, TorqueModel)) else tuple(frictions))
+    limits = per_joint("limits", limits, robot.n_joints)
+    if limits is None:
+        estimators = tuple(e for e in estimators if getattr(e, "sigma", None) != "limits")
+    if not frictions or not estimators:
+        raise ValueError("select_model needs at least one friction model and one estimator")
+    for e in estimators:
+        _check_estimator(e)
+    K = getattr(transmission, "matrix", transmission)
     coupled = K is not None and bool(coupled_motors(K))
-    (q, qd, qdd, tau), labels, period = _folds_of(robot, times, q, qd, qdd, tau, folds)
-    if settings.get("base") is None:  # computed once for every candidate
-        settings = {**settings, "base": base_parameters(robot)}
-    tried = []
+    (q, qd, qdd, tau), labels, period = _recording(robot, data, folds)
+    if base is None:  # computed once for every candidate
+        base = base_parameters(robot)
+    tried, options = [], []
     for friction in frictions:
-        if coupled and "coupling" not in friction:
+        if isinstance(friction, str) and coupled and "coupling" not in friction:
             friction = friction + "+coupling"
-        Y = None  # one regressor per torque model, shared by the weightings
-        for method, sigma in weightings:
-            public = {"method": method, "sigma": sigma, "friction": friction}
-            setup = prepare(robot, warn=False, **{**settings, **public})
-            Y = setup.model.regressor(q, qd, qdd) if Y is None else Y
-            tried.append((public, _cross_validate(setup, Y, tau, labels, period, sigma)))
+        model = torque_model(robot, friction, transmission=transmission, base=base,
+                             smooth_velocity=smooth_velocity) if isinstance(friction, str) \
+            else torque_model(robot, friction)
+        Y = model.regressor(q, qd, qdd)  # one regressor per torque model
+        for estimator in estimators:
+            estimator.check(model, limits)
+            settings = {"method": estimator.name, "sigma": getattr(estimator, "sigma", None),
+                        "friction": friction if isinstance(friction, str) else model.friction}
+            tried.append((settings, cross_validation_of(estimator, model, Y, tau, limits,
+                                                        labels, period)))
+            options.append((estimator, model))
+            if progress is not None:
+                progress(f"{estimator.name}, {model.friction}", len(tried),
+                         len(frictions) * len(estimators))
     best_settings, best = min(tried, key=lambda c: c[1].score)
-    # simplest: fewest parameters, then the earlier (simpler) weighting
+    # simplest: fewest parameters, then the earlier (simpler) estimator
     order = sorted(range(len(tried)), key=lambda i: (tried[i][1].n_parameters, i))
-    chosen = next(tried[i][0] for i in order if _not_worse(tried[i][1], best))
-    return Selection(candidates=tuple(tried), chosen=chosen, best=best_settings)
+    chosen = next(tried[i][0] for i in order if not_worse(tried[i][1], best))
+    return Selection(candidates=tuple(tried), chosen=chosen, best=best_settings,
+                     options=tuple(options))
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class PriorSelection:
     """What :func:`choose_prior_strength` returns: each strength's cross-validation (in
-    the order tried) and the chosen and the lowest strength."""
+    the order tried), the chosen and the lowest strength, and the estimator of each
+    (``estimators``); :attr:`estimator` is the chosen one."""
 
     candidates: tuple[tuple[float, CrossValidation], ...]
     chosen: float
     best: float
+    estimators: tuple[Estimator, ...] = ()
+
+    @property
+    def estimator(self) -> Estimator:
+        return self.estimators[[s for s, _ in self.candidates].index(self.chosen)]
+
+    @property
+    def cross_validation(self) -> CrossValidation:
+        """The chosen strength's cross-validation."""
+        return dict(self.candidates)[self.chosen]
 
     def table(self) -> list[list[str]]:
         """Rows ``[strength, CV error +- SE, chosen]``."""
@@ -272,41 +259,48 @@ class PriorSelection:
                                for s, cv in self.candidates]}
 
 
-def choose_prior_strength(robot, times, q, qd, qdd, tau, *, strengths=PRIOR_STRENGTHS,
-                          folds=DEFAULT_FOLDS, **settings) -> PriorSelection:
+def choose_prior_strength(robot, data, estimator: Estimator = PhysicallyConsistent(),
+                          model=None, *old_args, strengths=PRIOR_STRENGTHS,
+                          folds=DEFAULT_FOLDS, limits=None, transmission=None, base=None,
+                          smooth_velocity: float = SMOOTH_VELOCITY, **old_keywords
+                          ) -> PriorSelection:
     """Choose how strongly a physically consistent fit is pulled toward the a-priori
-    parameters (``prior_strength`` of :func:`~.identify.identify`) by cross-validation over
-    the same phase folds as :func:`select_model`: every strength in ``strengths`` is
-    cross-validated with ``settings`` (``physical=True`` is implied; ``method``,
-    ``friction``, ``sigma``, ``prior``, ``limits``, ...), and the STRONGEST pull whose
-    fold-by-fold excess over the lowest error is within one standard error is kept (the
-    one-standard-error rule: the most regularised model the data cannot tell from the
-    best). The held-out folds are fitted by nothing, chosen by nothing else."""
+    parameters (``prior_strength`` of :class:`~.estimators.PhysicallyConsistent`; an
+    ``OLS`` or ``WLS`` ``estimator`` is made physically consistent) by cross-validation
+    over the same phase folds as :func:`select_model`: every strength in ``strengths`` is
+    cross-validated, and the STRONGEST pull whose fold-by-fold excess over the lowest
+    error is within one standard error is kept (the one-standard-error rule: the most
+    regularised model the data cannot tell from the best). The held-out folds are fitted
+    by nothing, chosen by nothing else."""
     strengths = tuple(float(v) for v in strengths)
     if not strengths or any(not (np.isfinite(v) and v >= 0) for v in strengths):
         raise ValueError(f"strengths must be numbers >= 0, at least one, got {strengths}")
-    if settings.get("method", "OLS") not in ("OLS", "WLS"):
-        raise ValueError("the pull to the prior is a physically consistent least-squares "
-                         "fit: method 'OLS' or 'WLS'")
-    (q, qd, qdd, tau), labels, period = _folds_of(robot, times, q, qd, qdd, tau, folds)
-    settings = {**settings, "physical": True}
-    if settings.get("base") is None:
-        settings["base"] = base_parameters(robot)
-    tried, Y = [], None
+    if old_args or old_keywords:
+        data = _old_form("choose_prior_strength", data, (estimator, model, *old_args), 4)
+        keywords = {"method": "OLS", **old_keywords, "physical": True}
+        if keywords["method"] not in ("OLS", "WLS"):
+            raise ValueError("the pull to the prior is a physically consistent least-squares "
+                             "fit: method 'OLS' or 'WLS'")
+        estimator, model = from_keywords(robot, keywords, transmission=transmission,
+                                         base=base, smooth_velocity=smooth_velocity)
+        transmission, base, smooth_velocity = None, None, SMOOTH_VELOCITY
+    if isinstance(estimator, OLS):
+        estimator = PhysicallyConsistent(estimator)
+    if not isinstance(estimator, PhysicallyConsistent):
+        raise ValueError(f"the pull to the prior is a physically consistent least-squares "
+                         f"fit: PhysicallyConsistent(...) (of OLS or WLS), not {estimator!r}")
+    model = torque_model(robot, model, transmission=transmission, base=base,
+                         smooth_velocity=smooth_velocity)
+    limits = per_joint("limits", limits, robot.n_joints)
+    estimator.check(model, limits)
+    (q, qd, qdd, tau), labels, period = _recording(robot, data, folds)
+    Y = model.regressor(q, qd, qdd)
+    tried, estimators = [], []
     for v in strengths:
-        setup = prepare(robot, warn=False, **{**settings, "prior_strength": v})
-        Y = setup.model.regressor(q, qd, qdd) if Y is None else Y
-        tried.append((v, _cross_validate(setup, Y, tau, labels, period,
-                                         settings.get("sigma"))))
+        estimators.append(dataclasses.replace(estimator, prior_strength=v))
+        tried.append((v, cross_validation_of(estimators[-1], model, Y, tau, limits, labels,
+                                             period)))
     best_v, best = min(tried, key=lambda c: c[1].score)
-    chosen = max(v for v, cv in tried if _not_worse(cv, best))
-    return PriorSelection(candidates=tuple(tried), chosen=chosen, best=best_v)
-
-
-def _not_worse(cv: CrossValidation, best: CrossValidation) -> bool:
-    """Whether ``cv``'s mean excess over ``best``, fold by fold, is at most one standard
-    error of that excess, or below :data:`TIE_FRACTION` of the best error."""
-    excess = cv.fold_scores - best.fold_scores
-    k = len(excess)
-    se = float(np.std(excess, ddof=1) / np.sqrt(k)) if k > 1 else 0.0
-    return float(np.mean(excess)) <= max(se, TIE_FRACTION * best.score)
+    chosen = max(v for v, cv in tried if not_worse(cv, best))
+    return PriorSelection(candidates=tuple(tried), chosen=chosen, best=best_v,
+                          estimators=tuple(estimators))

@@ -28,4 +28,5 @@ from .ldwpso import LDWPSO as LDWPSO
 from .registry import SWARMS as SWARMS
 from .result import Result as Result
 from .sedsabso import SEDSABSO as SEDSABSO
+from .solver import AbstractSolver as AbstractSolver
 from .swarm import AbstractSwarm as AbstractSwarm

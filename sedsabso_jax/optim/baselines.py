@@ -25,6 +25,7 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
+from .. import _x64
 from .fitness import L1Residual
 from .linear import factorize, l1_solve
 from .result import Result
@@ -92,8 +93,10 @@ def least_squares(problem, method: str = "LM", x0=None, max_steps: int = 256,
     Gauss-Newton (``"GN"``) from ``x0`` (default zeros). Warns if the solver stops without
     success (e.g. ``max_steps`` reached). ``n_evaluations`` is the number of steps taken.
     Always solved in float64: a float32 problem is promoted (optimistix 0.1.0's
-    Levenberg-Marquardt fails on float32 input under JAX's x64 mode).
+    Levenberg-Marquardt fails on float32 input under JAX's x64 mode), which needs JAX's
+    64-bit mode on.
     """
+    _x64.require(f"least_squares ({method})")
     if method not in _SOLVERS:
         raise ValueError(f"method must be one of {sorted(_SOLVERS)}, got {method!r}")
     problem = _as_problem(problem)
@@ -113,8 +116,9 @@ def least_squares(problem, method: str = "LM", x0=None, max_steps: int = 256,
     x = jax.block_until_ready(x)
     run_s = time.perf_counter() - t0
     if not bool(result == optx.RESULTS.successful):
+        why = optx.RESULTS[result]  # type: ignore[misc, type-arg, valid-type]
         warnings.warn(f"least_squares ({method}): optimistix did not succeed after "
-                      f"{int(n_steps)} steps: {optx.RESULTS[result]}", stacklevel=2)
+                      f"{int(n_steps)} steps: {why}", stacklevel=2)
     return _result(method, problem, x, int(n_steps), compile_s, run_s)
 
 

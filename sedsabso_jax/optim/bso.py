@@ -15,7 +15,9 @@ the antennae cost no product with ``W`` (``W xl = W x + d/2 W V``) and only thei
 difference is needed, so an iteration costs one product with ``W`` (new positions and
 velocities stacked) and one pass over the residuals for 3 evaluations: the antennae of
 the new positions are evaluated with them and carried to the next iteration as one
-number per beetle (:meth:`~.fitness.L1Residual.evaluate_with_antennae`).
+number per beetle (:meth:`~.fitness.L1Residual.evaluate_with_antennae`). Asked for
+points (``ask``/``tell``), an iteration asks for each beetle's new position and its two
+antennae: ``3 N`` points.
 
 :class:`BeetleSwarm` holds this step and its hyperparameters; :class:`BSO` runs it with a
 constant population, :class:`~sedsabso_jax.SEDSABSO` adds annealing and a shrinking one.
@@ -26,12 +28,13 @@ from __future__ import annotations
 import equinox as eqx
 import jax.numpy as jnp
 
+from .solver import is_concrete
 from .swarm import (
     AbstractSwarm,
+    SwarmState,
     check_population,
     check_velocity_update,
     evaluate,
-    initial_state,
     update_bests,
 )
 
@@ -49,7 +52,10 @@ class BeetleSwarm(AbstractSwarm):
     vmax_fraction: float = 0.5  # Vmax = vmax_fraction * (upper - lower), the authors' code
     literal_sign: bool = False  # True: the authors' sign, toward the worse antenna
 
-    def check(self) -> None:
+    def __check_init__(self) -> None:
+        if not is_concrete(self.c1, self.c2, self.vmax_fraction, self.lam, self.delta,
+                           self.c):
+            return
         check_velocity_update(self.c1, self.c2, self.vmax_fraction)
         if not 0.0 <= self.lam <= 1.0:
             raise ValueError(f"lam must lie in [0, 1], got {self.lam}")
@@ -67,17 +73,11 @@ class BeetleSwarm(AbstractSwarm):
         d = self.delta / self.c
         return 0.5 * d
 
-    def init(self, fitness, lower, upper, key):
-        """The initial population (uniform in the box, velocities in ``+-Vmax``) with its
-        antennae evaluated."""
-        return initial_state(fitness, lower, upper, key, self.n_slots,
-                             self.vmax_fraction * (upper - lower), antenna=self.antenna)
-
-    def beetle_step(self, fitness, s, lower, upper, r1, r2):
-        """Eq. 10-13 for every slot, with ``r1, r2`` the uniform draws of Eq. 11; returns
-        the state with bests updated and the swarm's global best (x, f) among the active
-        slots. The antenna difference ``f(xl) - f(xr)`` at the current positions is the
-        state's (computed with their fitness); the new positions' is computed here."""
+    def move(self, s: SwarmState, draws, lower, upper):
+        """Eq. 10-13 for every slot with ``draws`` the uniforms ``(r1, r2)`` of Eq. 11
+        (stacked or not): the antenna difference ``f(xl) - f(xr)`` at the current
+        positions is the state's (computed with their fitness)."""
+        r1, r2 = draws[0], draws[1]
         direction = jnp.nan_to_num(jnp.sign(s.antennae))  # inf - inf: no preference
         if not self.literal_sign:
             direction = -direction
@@ -85,21 +85,37 @@ class BeetleSwarm(AbstractSwarm):
         vmax = self.vmax_fraction * (upper - lower)
         v = self.w * s.v + self.c1 * r1 * (s.pbest_x - s.x) + self.c2 * r2 * (s.guide_x - s.x)
         v = jnp.clip(v, -vmax, vmax)
-        x = jnp.clip(s.x + self.lam * v + (1.0 - self.lam) * xi, lower, upper)
-        raw, diff, diff_bad = fitness.evaluate_with_antennae(x, v, self.antenna)
-        f, bad = evaluate(fitness, x, s.active, raw)
+        return jnp.clip(s.x + self.lam * v + (1.0 - self.lam) * xi, lower, upper), v
+
+    def absorb_beetles(self, s: SwarmState, raw, diff, diff_bad):
+        """The moved beetles' fitness and antennae taken in: personal and best-ever
+        updated; returns the state and the swarm's global best ``(x, f)`` among the active
+        slots (the guide is the subclass's)."""
+        f, bad = evaluate(None, s.x, s.active, raw)
         bad = s.slot_nonfinite + bad + jnp.where(s.active, s.antennae_bad, 0)
         n_active = jnp.sum(s.active, dtype=jnp.int32)
         s = eqx.tree_at(
-            lambda s: (s.v, s.antennae, s.antennae_bad, s.n_evaluations, s.slot_nonfinite), s,
-            (v, diff, diff_bad, s.n_evaluations + 3 * n_active, bad))
-        return update_bests(s, x, f)
+            lambda s: (s.antennae, s.antennae_bad, s.n_evaluations, s.slot_nonfinite), s,
+            (diff, diff_bad, s.n_evaluations + 3 * n_active, bad))
+        return update_bests(s, s.x, f)
+
+    def beetle_step(self, fitness, s: SwarmState, lower, upper, r1, r2):
+        """Eq. 10-13 for every slot, with ``r1, r2`` the uniform draws of Eq. 11; returns
+        the state with bests updated and the swarm's global best (x, f) among the active
+        slots."""
+        x, v = self.move(s, (r1, r2), lower, upper)
+        raw, diff, diff_bad = self.evaluate_moved(fitness, x, v)
+        return self.absorb_beetles(eqx.tree_at(lambda s: (s.x, s.v), s, (x, v)), raw, diff,
+                                   diff_bad)
 
 
 class BSO(BeetleSwarm):
     """Beetle swarm with a constant population. Defaults: the paper's Sec. 5.2."""
 
     n_beetles: int = 50  # N: population size
+
+    def __check_init__(self) -> None:
+        check_population(self.n_beetles, "n_beetles")
 
     @classmethod
     def paper(cls) -> BSO:
@@ -111,11 +127,6 @@ class BSO(BeetleSwarm):
     def n_slots(self) -> int:
         return self.n_beetles
 
-    def check(self) -> None:
-        check_population(self.n_beetles, "n_beetles")
-        super().check()
-
-    def step(self, fitness, s, t, iterations, lower, upper, draws):
-        r1, r2 = draws
-        s, (gx, gf) = self.beetle_step(fitness, s, lower, upper, r1, r2)
+    def absorb(self, s: SwarmState, raw, diff, diff_bad) -> SwarmState:
+        s, (gx, gf) = self.absorb_beetles(s, raw, diff, diff_bad)
         return eqx.tree_at(lambda s: (s.guide_x, s.guide_f), s, (gx, gf))

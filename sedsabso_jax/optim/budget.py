@@ -8,17 +8,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from .external import Evosax
-from .swarm import AbstractSwarm
+from .solver import AbstractSolver
 
 
-def evaluation_counts(solver: AbstractSwarm | Evosax, iterations: int, dim: int) -> np.ndarray:
+def evaluation_counts(solver: AbstractSolver, iterations: int, dim: int) -> np.ndarray:
     """Cumulative fitness evaluations after each iteration of ``solver`` in dimension
     ``dim`` (what ``minimise(...).n_evaluations`` reports after the last)."""
     return np.asarray(solver.evaluation_counts(int(iterations), int(dim)), dtype=np.int64)
 
 
-def iterations_for_budget(solver: AbstractSwarm | Evosax, budget: int, dim: int) -> int:
+def iterations_for_budget(solver: AbstractSolver, budget: int, dim: int) -> int:
     """The most iterations whose evaluations (initial population included) fit in
     ``budget``. Raises ValueError when not even one iteration fits."""
     if isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 1:
@@ -31,7 +30,7 @@ def iterations_for_budget(solver: AbstractSwarm | Evosax, budget: int, dim: int)
     one = total(1)
     if one > budget:
         raise ValueError(f"budget {budget} evaluations is below one generation of "
-                         f"{_name(solver)} in {dim} dimensions ({one} evaluations, initial "
+                         f"{solver.label} in {dim} dimensions ({one} evaluations, initial "
                          f"population included)")
     lo, hi = 1, 2  # total(lo) <= budget; grow hi until it does not fit
     while total(hi) <= budget:
@@ -42,7 +41,3 @@ def iterations_for_budget(solver: AbstractSwarm | Evosax, budget: int, dim: int)
     while lo > 1 and total(lo) > budget:  # pragma: no cover - rounding safety
         lo -= 1
     return lo
-
-
-def _name(solver) -> str:
-    return f"evosax {solver.name}" if isinstance(solver, Evosax) else type(solver).__name__

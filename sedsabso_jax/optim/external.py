@@ -15,18 +15,26 @@ Population-based strategies (PSO, DE, GA) start from a population drawn uniforml
 box, which costs one population of evaluations; distribution-based ones (CMA-ES, NES, ES)
 start from a mean drawn uniformly in the box with ``std_init`` (a fraction of each side).
 A NaN or Inf fitness is told as +Inf and counted, as in the swarms.
+
+:class:`Evosax` implements the solver contract (:class:`~.solver.AbstractSolver`): one
+iteration is one generation, one ask/tell round; ``init`` of a population-based
+strategy asks for its initial population first.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from typing import Any
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Array, Float, Int
 
 from .fitness import finite_or_inf
+from .solver import AbstractSolver
 from .swarm import check_population
 
 #: Strategies whose default population is CMA-ES's ``4 + floor(3 ln d)`` (Hansen's rule)
@@ -49,7 +57,26 @@ def evosax_names() -> tuple[str, ...]:
     return tuple(sorted(_evosax_algorithms()))
 
 
-class Evosax(eqx.Module):
+class EvosaxState(eqx.Module):
+    """A run of an evosax strategy: the strategy's own state, the best point evaluated
+    (in the box and in the unit cube the strategy sees), counts, and every generation's
+    key (split up front, as evosax's examples do). ``stage`` and ``pending`` are the
+    ask/tell bookkeeping."""
+
+    strategy: Any
+    best_u: Float[Array, " d"]
+    best_x: Float[Array, " d"]
+    best_f: Float[Array, ""]
+    n_evaluations: Int[Array, ""]
+    n_nonfinite: Int[Array, ""]
+    keys: Any  # (iterations,) generation keys
+    t: Int[Array, ""]
+    k_init: Any = None
+    stage: str = eqx.field(static=True, default="ask")
+    pending: Any = None
+
+
+class Evosax(AbstractSolver):
     """An evosax strategy by name, e.g. ``Evosax("CMA_ES")`` or
     ``Evosax("PSO", population_size=50, params={"inertia_coeff": 0.8})``.
 
@@ -74,7 +101,7 @@ class Evosax(eqx.Module):
         self.std_init = std_init
         self.params = tuple(sorted((params or {}).items()))
 
-    def check(self) -> None:
+    def __check_init__(self) -> None:
         algorithms = _evosax_algorithms()
         if self.name not in algorithms:
             raise ValueError(f"unknown evosax strategy {self.name!r}; expected one of "
@@ -83,6 +110,11 @@ class Evosax(eqx.Module):
             check_population(self.population_size, "population_size")
         if not self.std_init > 0:
             raise ValueError(f"std_init must be > 0, got {self.std_init}")
+        self._strategy(2, jnp.float32)  # unknown strategy parameters fail here
+
+    @property
+    def label(self) -> str:
+        return f"evosax {self.name}"
 
     def population(self, dim: int) -> int:
         """Candidates per generation in dimension ``dim``."""
@@ -113,6 +145,10 @@ class Evosax(eqx.Module):
         from evosax.algorithms.distribution_based.base import DistributionBasedAlgorithm
         return issubclass(_evosax_algorithms()[self.name], DistributionBasedAlgorithm)
 
+    @property
+    def initial_asks(self) -> int:
+        return 0 if self.distribution_based else 1
+
     def evaluation_counts(self, iterations: int, dim: int) -> np.ndarray:
         """Cumulative fitness evaluations after each generation (the initial population
         of a population-based strategy counts before the first)."""
@@ -120,50 +156,75 @@ class Evosax(eqx.Module):
         start = 0 if self.distribution_based else lam
         return start + lam * np.arange(1, iterations + 1)
 
-    def single_run(self, fitness, lower, upper, key, iterations: int):
-        """One run: ``(best_x, best_f, history_f, history_n, sa_accepted, n_evaluations,
-        n_nonfinite)`` like the swarms' runs (see :func:`~.driver.minimise`)."""
+    @staticmethod
+    def _cast(tree, dtype):
+        """evosax builds float64 state under x64: the carry stays in the run's dtype."""
+        return jax.tree.map(lambda a: a.astype(dtype) if jnp.issubdtype(
+            jnp.result_type(a), jnp.floating) else a, tree)
+
+    def start(self, lower, upper, key, iterations: int) -> EvosaxState:
+        """Distribution-based: the strategy's mean drawn uniformly in the box (nothing to
+        evaluate). Population-based: the initial population drawn, to be asked for."""
         dim, dtype = lower.shape[0], lower.dtype
         strategy, params = self._strategy(dim, dtype)
-        lam = self.population(dim)
-        width = upper - lower
-
-        def cast(tree):  # evosax builds float64 state under x64: keep the carry in dtype
-            return jax.tree.map(lambda a: a.astype(dtype) if jnp.issubdtype(
-                jnp.result_type(a), jnp.floating) else a, tree)
-
-        def evaluate(u):
-            u = jnp.clip(u, 0.0, 1.0)
-            raw = fitness.value(fitness.embed(lower + width * u))
-            bad = jnp.sum(~jnp.isfinite(raw), dtype=jnp.int32)
-            return u, finite_or_inf(raw), bad
-
         k_init, k_pop, k_loop = jax.random.split(key, 3)
+        keys = jax.random.split(k_loop, int(iterations))
+        common = dict(best_f=jnp.asarray(jnp.inf, dtype), n_nonfinite=jnp.int32(0),
+                      keys=keys, t=jnp.int32(0))
         if self.distribution_based:
             mean = jax.random.uniform(k_pop, (dim,), dtype)
-            state = strategy.init(k_init, mean, params)
-            best_u, best_f, n_bad = mean, jnp.asarray(jnp.inf, dtype), jnp.int32(0)
+            return EvosaxState(strategy=self._cast(strategy.init(k_init, mean, params), dtype),
+                               best_u=mean, best_x=lower + (upper - lower) * mean,
+                               n_evaluations=jnp.int32(0), **common)
+        u0 = jax.random.uniform(k_pop, (self.population(dim), dim), dtype)
+        return EvosaxState(strategy=None, best_u=u0[0], best_x=lower + (upper - lower) * u0[0],
+                           n_evaluations=jnp.int32(0), k_init=k_init, stage="start",
+                           pending=u0, **common)
+
+    def ask(self, state: EvosaxState, lower, upper):
+        if state.stage == "start":
+            u = state.pending
+            return lower + (upper - lower) * u, dataclasses.replace(state, stage="started")
+        if state.stage != "ask":
+            raise ValueError(f"{self.label}.ask: the state waits for tell (stage "
+                             f"{state.stage!r})")
+        strategy, params = self._strategy(lower.shape[0], lower.dtype)
+        k_ask, _ = jax.random.split(state.keys[state.t])
+        u, s = strategy.ask(k_ask, state.strategy, params)
+        u = jnp.clip(u, 0.0, 1.0)  # the clipped point is evaluated and told
+        return lower + (upper - lower) * u, dataclasses.replace(
+            state, strategy=s, stage="tell", pending=u)
+
+    def tell(self, state: EvosaxState, fitness_values, lower, upper) -> EvosaxState:
+        dim, dtype = lower.shape[0], lower.dtype
+        u = state.pending
+        if state.stage not in ("started", "tell"):
+            raise ValueError(f"{self.label}.tell: no points were asked for; call ask first")
+        raw = jnp.asarray(fitness_values, dtype).reshape(-1)
+        if raw.shape[0] != u.shape[0]:
+            raise ValueError(f"{self.label}.tell: expected {u.shape[0]} fitness values (one "
+                             f"per point asked), got {raw.shape[0]}")
+        f = finite_or_inf(raw)
+        bad = state.n_nonfinite + jnp.sum(~jnp.isfinite(raw), dtype=jnp.int32)
+        strategy, params = self._strategy(dim, dtype)
+        i = jnp.argmin(f)
+        if state.stage == "started":
+            s = strategy.init(state.k_init, u, f, params)
+            best_u, best_f, t = u[i], f[i], state.t
         else:
-            u0, f0, n_bad = evaluate(jax.random.uniform(k_pop, (lam, dim), dtype))
-            state = strategy.init(k_init, u0, f0, params)
-            i = jnp.argmin(f0)
-            best_u, best_f = u0[i], f0[i]
+            _, k_tell = jax.random.split(state.keys[state.t])
+            s, _ = strategy.tell(k_tell, u, f, state.strategy, params)
+            better = f[i] < state.best_f
+            best_u = jnp.where(better, u[i], state.best_u)
+            best_f = jnp.where(better, f[i], state.best_f)
+            t = state.t + 1
+        return dataclasses.replace(
+            state, strategy=self._cast(s, dtype), best_u=best_u,
+            best_x=lower + (upper - lower) * best_u, best_f=best_f,
+            n_evaluations=state.n_evaluations + u.shape[0], n_nonfinite=bad, t=t,
+            k_init=None, stage="ask", pending=None)
 
-        def generation(carry, k):
-            state, best_u, best_f, n_bad = carry
-            k_ask, k_tell = jax.random.split(k)
-            u, state = strategy.ask(k_ask, state, params)
-            u, f, bad = evaluate(u)
-            state, _ = strategy.tell(k_tell, u, f, state, params)
-            i = jnp.argmin(f)
-            better = f[i] < best_f
-            best_u = jnp.where(better, u[i], best_u)
-            best_f = jnp.where(better, f[i], best_f)
-            return (cast(state), best_u, best_f, n_bad + bad), best_f
+    def best(self, state: EvosaxState):
+        return state.best_x, state.best_f
 
-        carry = (cast(state), best_u, best_f, n_bad)
-        (_, best_u, best_f, n_bad), hist = jax.lax.scan(
-            generation, carry, jax.random.split(k_loop, iterations))
-        n_eval = int(self.evaluation_counts(iterations, dim)[-1])
-        return (lower + width * best_u, best_f, hist, jnp.full(iterations, lam, jnp.int32),
-                jnp.int32(0), jnp.int32(n_eval), n_bad)
+

@@ -26,6 +26,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from .. import _x64
+
 
 def finite_or_inf(f):
     """NaN or Inf fitness counts as +Inf, so it never becomes a best."""
@@ -93,7 +95,11 @@ class L1Residual(eqx.Module):
     tau: Float[Array, " m"]
     W_constant: _Constant | None = eqx.field(static=True)
 
-    def __init__(self, W, tau, dtype=jnp.float64):
+    def __init__(self, W, tau, dtype=None):
+        dtype = _x64.float_dtype(dtype)
+        if isinstance(W, jax.core.Tracer) or isinstance(tau, jax.core.Tracer):
+            self._init_traced(W, tau, dtype)
+            return
         W = np.asarray(W, dtype=float)
         tau = np.asarray(tau, dtype=float)
         if W.ndim > 2:  # (samples, joints, d) -> stacked
@@ -109,8 +115,19 @@ class L1Residual(eqx.Module):
         small = W.nbytes <= CONSTANT_BYTES and jax.default_backend() == "cpu"
         self.W_constant = _Constant(W) if small else None
 
+    def _init_traced(self, W, tau, dtype):
+        """Data traced by a caller's ``jit``/``vmap`` (several data sets in one call): the
+        shapes are checked, the values cannot be; ``W`` is an argument, not a constant."""
+        W, tau = jnp.asarray(W, dtype), jnp.asarray(tau, dtype)
+        if W.ndim > 2:
+            W = W.reshape(-1, W.shape[-1])
+        tau = tau.reshape(-1)
+        if W.ndim != 2 or W.shape[0] != tau.shape[0]:
+            raise ValueError(f"W must be (m, d) and tau (m,); got W {W.shape}, tau {tau.shape}")
+        self.W, self.WT, self.tau, self.W_constant = W, W.T, tau, None
+
     @classmethod
-    def from_base(cls, base, q, qd, qdd, tau, dtype=jnp.float64) -> L1Residual:
+    def from_base(cls, base, q, qd, qdd, tau, dtype=None) -> L1Residual:
         """Eq. 17 for a :class:`~sedsabso_jax.BaseParameters` set and data
         ``q, qd, qdd, tau`` of shape ``(samples, n)``."""
         return cls(np.asarray(base.regressor(q, qd, qdd)), np.asarray(tau), dtype=dtype)

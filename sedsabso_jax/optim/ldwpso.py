@@ -12,8 +12,10 @@ from __future__ import annotations
 import equinox as eqx
 import jax.numpy as jnp
 
+from .solver import is_concrete
 from .swarm import (
     AbstractSwarm,
+    SwarmState,
     check_population,
     check_velocity_update,
     evaluate,
@@ -31,6 +33,11 @@ class LDWPSO(AbstractSwarm):
     w_end: float = 0.4  # w(K - 1): inertia at the last iteration
     vmax_fraction: float = 0.5  # Vmax = vmax_fraction * (upper - lower)
 
+    def __check_init__(self) -> None:
+        check_population(self.n_particles, "n_particles")
+        if is_concrete(self.c1, self.c2, self.vmax_fraction):
+            check_velocity_update(self.c1, self.c2, self.vmax_fraction)
+
     @classmethod
     def paper(cls) -> LDWPSO:
         """N = 50, c1 = c2 = 2, w from 0.9 to 0.4, Vmax = 0.5 (ub - lb)."""
@@ -40,21 +47,18 @@ class LDWPSO(AbstractSwarm):
     def n_slots(self) -> int:
         return self.n_particles
 
-    def check(self) -> None:
-        check_population(self.n_particles, "n_particles")
-        check_velocity_update(self.c1, self.c2, self.vmax_fraction)
-
-    def step(self, fitness, s, t, iterations, lower, upper, draws):
-        w = self.w_start - (self.w_start - self.w_end) * t / max(iterations - 1, 1)
+    def move(self, s: SwarmState, draws, lower, upper):
+        w = self.w_start - (self.w_start - self.w_end) * s.t / max(s.iterations - 1, 1)
         r1, r2 = draws
         vmax = self.vmax_fraction * (upper - lower)
         v = w * s.v + self.c1 * r1 * (s.pbest_x - s.x) + self.c2 * r2 * (s.guide_x - s.x)
         v = jnp.clip(v, -vmax, vmax)
-        x = jnp.clip(s.x + v, lower, upper)
-        f, bad = evaluate(fitness, x, s.active)
-        s = eqx.tree_at(lambda s: (s.v, s.n_evaluations, s.slot_nonfinite), s,
-                        (v,
-                         s.n_evaluations + jnp.sum(s.active, dtype=jnp.int32),
+        return jnp.clip(s.x + v, lower, upper), v
+
+    def absorb(self, s: SwarmState, raw, diff=None, diff_bad=None) -> SwarmState:
+        f, bad = evaluate(None, s.x, s.active, raw)
+        s = eqx.tree_at(lambda s: (s.n_evaluations, s.slot_nonfinite), s,
+                        (s.n_evaluations + jnp.sum(s.active, dtype=jnp.int32),
                          s.slot_nonfinite + bad))
-        s, (gx, gf) = update_bests(s, x, f)
+        s, (gx, gf) = update_bests(s, s.x, f)
         return eqx.tree_at(lambda s: (s.guide_x, s.guide_f), s, (gx, gf))

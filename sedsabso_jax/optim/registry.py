@@ -9,7 +9,7 @@ from .sedsabso import SEDSABSO
 from .swarm import AbstractSwarm
 
 #: Name -> solver class; each has ``.paper()``, the paper's settings (Sec. 5.2).
-SWARMS: dict[str, type[AbstractSwarm]] = {"SEDSABSO": SEDSABSO, "BSO": BSO, "LDWPSO": LDWPSO}
+SWARMS: dict[str, type[SEDSABSO] | type[BSO] | type[LDWPSO]] = {"SEDSABSO": SEDSABSO, "BSO": BSO, "LDWPSO": LDWPSO}
 
 
 def paper_solver(name: str) -> AbstractSwarm:

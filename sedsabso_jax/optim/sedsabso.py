@@ -13,7 +13,8 @@ for k = 1..q in turn, then ``T <- decay T``. The guide steers the velocities (Eq
 evaluated is kept apart and is what is reported: an accepted worse guide never replaces
 it. All q candidates perturb the same ``P_g``, so they are evaluated with one product;
 only the scalar Metropolis chain is sequential. Candidates are clipped to the search box
-(the paper leaves this open).
+(the paper leaves this open). Asked for points (``ask``/``tell``), an iteration is two
+rounds: the beetles' ``3 N(t)`` points, then the ``q`` candidates around the new ``P_g``.
 
 Population (Eq. 15-16, decreasing form): ``N(t) = round(N_start exp(-(e_start + (e_end -
 e_start) t / (K - 1))))`` with the exponents ``e_start = Inf_min``, ``e_end = Inf_max`` of
@@ -27,14 +28,14 @@ compilation each on the 2-core CPU).
 
 from __future__ import annotations
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from .. import _deprecation
 from .bso import BeetleSwarm
-from .swarm import check_population, evaluate, initial_state, uniforms
+from .solver import is_concrete
+from .swarm import SwarmState, check_population, evaluate, replace, swarm_best, uniforms
 
 
 def metropolis_accept(u, f_new, f_old, temperature):
@@ -44,6 +45,11 @@ def metropolis_accept(u, f_new, f_old, temperature):
     is never accepted (``exp(-inf) = 0``; ``inf - inf`` gives NaN, which compares false).
     """
     return jnp.exp(-(f_new - f_old) / temperature) > u
+
+
+def _integer(value, name: str, minimum: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
 
 
 class SEDSABSO(BeetleSwarm):
@@ -57,6 +63,21 @@ class SEDSABSO(BeetleSwarm):
     decay: float = 0.93  # T <- decay * T every iteration
     perturbation_scale: float = 1.0  # s in cand = g (1 + s r); 1.0 is Eq. 14 as printed
     n_phases: int = 4  # compiled phases of static population size (see module doc)
+
+    def __check_init__(self) -> None:
+        check_population(self.n_start, "n_start")
+        _integer(self.n_trials, "n_trials", 0)
+        _integer(self.n_phases, "n_phases", 1)
+        if not is_concrete(self.temperature, self.decay, self.exponent_start,
+                           self.exponent_end):
+            return
+        if not self.temperature > 0:
+            raise ValueError(f"temperature must be > 0, got {self.temperature}")
+        if not 0.0 < self.decay < 1.0:
+            raise ValueError(f"decay must lie in (0, 1), got {self.decay}")
+        if not 0.0 <= self.exponent_start <= self.exponent_end:
+            raise ValueError(f"need 0 <= exponent_start <= exponent_end, got exponent_start="
+                             f"{self.exponent_start}, exponent_end={self.exponent_end}")
 
     @classmethod
     def paper(cls) -> SEDSABSO:
@@ -74,6 +95,14 @@ class SEDSABSO(BeetleSwarm):
     def n_slots(self) -> int:
         return self.n_start
 
+    @property
+    def initial_temperature(self) -> float:
+        return self.temperature
+
+    @property
+    def asks_per_iteration(self) -> int:
+        return 2 if self.n_trials else 1
+
     def schedule(self, iterations: int) -> np.ndarray:
         """Eq. 15-16, decreasing: ``round(N_start exp(-e(t)))``, ``e`` linear from
         :attr:`exponent_start` to :attr:`exponent_end` over the iterations, at least 1."""
@@ -81,31 +110,9 @@ class SEDSABSO(BeetleSwarm):
         e = self.exponent_start + (self.exponent_end - self.exponent_start) * t
         return np.maximum(np.round(self.n_start * np.exp(-e)), 1).astype(int)
 
-    def check(self) -> None:
-        check_population(self.n_start, "n_start")
-        super().check()
-        if (isinstance(self.n_trials, bool) or not isinstance(self.n_trials, (int, np.integer))
-                or self.n_trials < 0):
-            raise ValueError(f"n_trials must be an integer >= 0, got {self.n_trials!r}")
-        if not self.temperature > 0:
-            raise ValueError(f"temperature must be > 0, got {self.temperature}")
-        if not 0.0 < self.decay < 1.0:
-            raise ValueError(f"decay must lie in (0, 1), got {self.decay}")
-        if not 0.0 <= self.exponent_start <= self.exponent_end:
-            raise ValueError(f"need 0 <= exponent_start <= exponent_end, got exponent_start="
-                             f"{self.exponent_start}, exponent_end={self.exponent_end}")
-        if (isinstance(self.n_phases, bool) or not isinstance(self.n_phases, (int, np.integer))
-                or self.n_phases < 1):
-            raise ValueError(f"n_phases must be an integer >= 1, got {self.n_phases!r}")
-
     def evaluations(self, n_active):
         """BSO's three per beetle and the ``q`` annealing candidates (Eq. 14)."""
         return 3 * n_active + self.n_trials
-
-    def init(self, fitness, lower, upper, key):
-        return initial_state(fitness, lower, upper, key, self.n_slots,
-                             self.vmax_fraction * (upper - lower), self.temperature,
-                             antenna=self.antenna)
 
     def randomness(self, key, dim, dtype):
         """Keys for BSO's ``r1, r2`` (Eq. 11); Eq. 14's ``r`` (q x dim) and the q Metropolis
@@ -122,35 +129,85 @@ class SEDSABSO(BeetleSwarm):
         k12, r, u = randomness
         return uniforms(k12, shape, dtype), r, u
 
-    def step(self, fitness, s, t, iterations, lower, upper, draws):
-        r12, r, u = draws
-        r1, r2 = r12[0], r12[1]
-        s, (gx, gf) = self.beetle_step(fitness, s, lower, upper, r1, r2)
+    def move(self, s: SwarmState, draws, lower, upper):
+        return super().move(s, draws[0], lower, upper)
+
+    def absorb(self, s: SwarmState, raw, diff, diff_bad) -> SwarmState:
+        """The beetles' update; the guide becomes the swarm's best ``P_g`` if that is
+        better (without annealing trials, the temperature then cools)."""
+        s, (gx, gf) = self.absorb_beetles(s, raw, diff, diff_bad)
         swarm_better = gf < s.guide_f
-        guide_x = jnp.where(swarm_better, gx, s.guide_x)
-        guide_f = jnp.where(swarm_better, gf, s.guide_f)
+        s = replace(s, guide_x=jnp.where(swarm_better, gx, s.guide_x),
+                    guide_f=jnp.where(swarm_better, gf, s.guide_f))
         if self.n_trials == 0:  # no annealing: BSO with a shrinking population
-            return eqx.tree_at(lambda s: (s.guide_x, s.guide_f, s.temperature), s,
-                               (guide_x, guide_f, s.temperature * self.decay))
-        cand = jnp.clip(gx * (1.0 + self.perturbation_scale * r), lower, upper)  # Eq. 14
-        fc, bad = evaluate(fitness, cand)
-        # Metropolis against the current guide, the q trials in turn (q is small: unrolled)
-        chosen, accepted = jnp.int32(-1), s.sa_accepted
+            s = replace(s, temperature=s.temperature * self.decay)
+        return s
+
+    def candidates(self, gx, r, lower, upper):
+        """Eq. 14: ``clip(P_g (1 + s r_k), lower, upper)`` for the q rows of ``r``."""
+        return jnp.clip(gx * (1.0 + self.perturbation_scale * r), lower, upper)
+
+    def accept(self, s: SwarmState, cand, raw, u) -> SwarmState:
+        """The q candidates' Metropolis trials against the current guide, in turn (q is
+        small: unrolled); the best ever kept apart; counts; the temperature cools."""
+        fc, bad = evaluate(None, cand, raw=raw)
+        guide_f, chosen, accepted = s.guide_f, jnp.int32(-1), s.sa_accepted
         for k in range(self.n_trials):
-            accept = metropolis_accept(u[k], fc[k], guide_f, s.temperature)
-            guide_f = jnp.where(accept, fc[k], guide_f)
-            chosen = jnp.where(accept, k, chosen)
-            accepted = accepted + accept.astype(jnp.int32)
-        gx = jnp.where(chosen >= 0, cand[jnp.maximum(chosen, 0)], guide_x)
+            ok = metropolis_accept(u[k], fc[k], guide_f, s.temperature)
+            guide_f = jnp.where(ok, fc[k], guide_f)
+            chosen = jnp.where(ok, k, chosen)
+            accepted = accepted + ok.astype(jnp.int32)
+        gx = jnp.where(chosen >= 0, cand[jnp.maximum(chosen, 0)], s.guide_x)
         i = jnp.argmin(fc)
         better = fc[i] < s.best_f
-        bx, bf = jnp.where(better, cand[i], s.best_x), jnp.where(better, fc[i], s.best_f)
-        bad = s.n_nonfinite + jnp.sum(bad, dtype=jnp.int32)
-        return eqx.tree_at(
-            lambda s: (s.guide_x, s.guide_f, s.best_x, s.best_f, s.sa_accepted, s.n_nonfinite,
-                       s.n_evaluations, s.temperature),
-            s, (gx, guide_f, bx, bf, accepted, bad, s.n_evaluations + self.n_trials,
-                s.temperature * self.decay))
+        return replace(
+            s, guide_x=gx, guide_f=guide_f, best_x=jnp.where(better, cand[i], s.best_x),
+            best_f=jnp.where(better, fc[i], s.best_f), sa_accepted=accepted,
+            n_nonfinite=s.n_nonfinite + jnp.sum(bad, dtype=jnp.int32),
+            n_evaluations=s.n_evaluations + self.n_trials,
+            temperature=s.temperature * self.decay)
+
+    def update(self, fitness, state: SwarmState, draws, lower, upper) -> SwarmState:
+        """The beetles' iteration (Eq. 10-13), then ``q`` annealing trials on ``P_g``
+        (Eq. 14), with the given draws."""
+        _, r, u = draws
+        x, v = self.move(state, draws, lower, upper)
+        raw, diff, diff_bad = self.evaluate_moved(fitness, x, v)
+        state = replace(state, x=x, v=v)
+        if self.n_trials == 0:
+            return self.finish(self.absorb(state, raw, diff, diff_bad))
+        state, (gx, gf) = self.absorb_beetles(state, raw, diff, diff_bad)
+        swarm_better = gf < state.guide_f
+        state = replace(state, guide_x=jnp.where(swarm_better, gx, state.guide_x),
+                        guide_f=jnp.where(swarm_better, gf, state.guide_f))
+        cand = self.candidates(gx, r, lower, upper)
+        return self.finish(self.accept(state, cand, fitness.evaluate(cand), u))
+
+    def after_evaluate(self, state: SwarmState) -> SwarmState:
+        if self.n_trials == 0:
+            return self.finish(state)
+        return replace(state, stage="anneal")
+
+    def ask(self, state: SwarmState, lower, upper):
+        if state.stage != "anneal":
+            return super().ask(state, lower, upper)
+        _, r, u = state.pending
+        gx, _ = swarm_best(state)
+        cand = self.candidates(gx, r, lower, upper)
+        return cand, replace(state, stage="accept", pending=(u, cand))
+
+    def tell(self, state: SwarmState, fitness_values, lower, upper) -> SwarmState:
+        if state.stage == "anneal":
+            raise ValueError("SEDSABSO.tell: the annealing candidates were not asked for; "
+                             "call ask first")
+        if state.stage != "accept":
+            return super().tell(state, fitness_values, lower, upper)
+        u, cand = state.pending
+        values = jnp.asarray(fitness_values, state.x.dtype).reshape(-1)
+        if values.shape[0] != self.n_trials:
+            raise ValueError(f"SEDSABSO.tell: expected {self.n_trials} fitness values (the "
+                             f"annealing candidates asked for), got {values.shape[0]}")
+        return self.finish(self.accept(state, cand, values, u))
 
 
 _deprecation.renamed_arguments(SEDSABSO, {"q": "n_trials", "f_min": "exponent_start",
