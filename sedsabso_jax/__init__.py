@@ -1,61 +1,96 @@
 """sedsabso-jax: identify the dynamic parameters of serial robots with JAX.
 
+The common names are here; specialised ones live in the namespaces ``robots`` (the
+built-in robots and constructors), ``baselines``, ``paper`` (the published numbers),
+``dynamics``, ``optim``, ``measurements``, ``excitation``, ``identification``,
+``compare`` and ``reproduce`` (each with its ``__all__``; no name is in two places).
+
 Importing the package changes nothing in JAX's configuration. Robots, the regressor, base
 parameters, identification and excitation design need float64: turn JAX's 64-bit mode on
 first (``jax.config.update("jax_enable_x64", True)``), or they stop with one line saying
-so. The optimisers run in the mode you chose (float32 when it is off).
-
-Layers (each imports only from the ones above it; see the README's "Layout"):
-``paper`` (the published numbers) and the private helpers; the two foundations
-``dynamics`` (robots, regressor, base parameters) and ``optim`` (swarms, baselines);
-``measurements`` and ``excitation``; ``identification``; ``reproduce``; ``cli``.
+so (:class:`Float64Required`). The optimisers run in the mode you chose (float32 when it
+is off) and compose under ``jax.jit`` and ``jax.vmap``.
 """
 
+from __future__ import annotations
+
+from . import _deprecation
+from . import baselines as baselines
+from . import compare as compare
+from . import dynamics as dynamics
 from . import excitation as excitation
 from . import identification as identification
 from . import measurements as measurements
+from . import optim as optim
 from . import paper as paper
+from . import reproduce as reproduce
+from . import robots as robots
 from ._version import __version__ as __version__
-from .dynamics import BaseParameters as BaseParameters
-from .dynamics import JointLimits as JointLimits
-from .dynamics import Robot as Robot
-from .dynamics import base_parameters as base_parameters
-from .dynamics import forward_kinematics as forward_kinematics
-from .dynamics import inverse_dynamics as inverse_dynamics
-from .dynamics import is_physically_consistent as is_physically_consistent
-from .dynamics import joint_limits_from_urdf as joint_limits_from_urdf
-from .dynamics import regressor as regressor
-from .dynamics import robots as robots
-from .excitation import FourierTrajectory as FourierTrajectory
-from .excitation import design_excitation as design_excitation
-from .identification import L1 as L1
-from .identification import OLS as OLS
-from .identification import WLS as WLS
-from .identification import BoxSearch as BoxSearch
-from .identification import Estimator as Estimator
-from .identification import Identification as Identification
-from .identification import IdentificationReport as IdentificationReport
-from .identification import LevenbergMarquardt as LevenbergMarquardt
-from .identification import Metrics as Metrics
-from .identification import PhysicallyConsistent as PhysicallyConsistent
-from .identification import TorqueModel as TorqueModel
-from .identification import identify as identify
-from .identification import metrics as metrics
-from .identification import select_and_identify as select_and_identify
-from .identification import validation_metrics as validation_metrics
-from .measurements import Measurements as Measurements
-from .measurements import load_kuka_lwr4 as load_kuka_lwr4
-from .measurements import load_measurements as load_measurements
-from .measurements import simulate_measurements as simulate_measurements
-from .measurements import simulate_measurements_along as simulate_measurements_along  # noqa: E501
-from .optim import BSO as BSO
-from .optim import LDWPSO as LDWPSO
-from .optim import SEDSABSO as SEDSABSO
-from .optim import BlackBox as BlackBox
-from .optim import Evosax as Evosax
-from .optim import L1Residual as L1Residual
-from .optim import Result as Result
-from .optim import baselines as baselines
-from .optim import box_around as box_around
-from .optim import iterations_for_budget as iterations_for_budget
-from .optim import minimise as minimise
+from ._x64 import Float64Required as Float64Required
+from .dynamics._base_parameters import BaseParameters as BaseParameters
+from .dynamics._base_parameters import base_parameters as base_parameters
+from .dynamics._inertia import is_physically_consistent as is_physically_consistent
+from .dynamics._kinematics import forward_kinematics as forward_kinematics
+from .dynamics._limits import JointLimits as JointLimits
+from .dynamics._limits import joint_limits_from_urdf as joint_limits_from_urdf
+from .dynamics._regressor import inverse_dynamics as inverse_dynamics
+from .dynamics._regressor import regressor as regressor
+from .dynamics._robot import Robot as Robot
+from .excitation._design import design_excitation as design_excitation
+from .excitation._trajectory import FourierTrajectory as FourierTrajectory
+from .identification._auto import select_and_identify as select_and_identify
+from .identification._estimators import L1 as L1
+from .identification._estimators import OLS as OLS
+from .identification._estimators import WLS as WLS
+from .identification._estimators import BoxSearch as BoxSearch
+from .identification._estimators import LevenbergMarquardt as LevenbergMarquardt
+from .identification._estimators import PhysicallyConsistent as PhysicallyConsistent
+from .identification._fitting import Estimator as Estimator
+from .identification._identify import Identification as Identification
+from .identification._identify import identify as identify
+from .identification._metrics import Metrics as Metrics
+from .identification._metrics import validation_metrics as validation_metrics
+from .identification._model import TorqueModel as TorqueModel
+from .identification._report import IdentificationReport as IdentificationReport
+from .identification._validation import choose_prior_strength as choose_prior_strength
+from .identification._validation import cross_validate as cross_validate
+from .identification._validation import select_model as select_model
+from .measurements._container import Measurements as Measurements
+from .measurements._load import load_kuka_lwr4 as load_kuka_lwr4
+from .measurements._load import load_measurements as load_measurements
+from .measurements._simulate import simulate_measurements as simulate_measurements
+from .measurements._simulate import simulate_measurements_along as simulate_measurements_along
+from .measurements._transmission import Transmission as Transmission
+from .optim._box import box_around as box_around
+from .optim._bso import BSO as BSO
+from .optim._budget import evaluation_counts as evaluation_counts
+from .optim._budget import iterations_for_budget as iterations_for_budget
+from .optim._driver import minimise as minimise
+from .optim._external import Evosax as Evosax
+from .optim._fitness import BlackBox as BlackBox
+from .optim._fitness import L1Residual as L1Residual
+from .optim._ldwpso import LDWPSO as LDWPSO
+from .optim._result import Result as Result
+from .optim._sedsabso import SEDSABSO as SEDSABSO
+from .optim._solver import AbstractSolver as AbstractSolver
+
+__all__ = [
+    "__version__", "Float64Required", "baselines", "compare", "dynamics", "excitation",
+    "identification", "measurements", "optim", "paper", "reproduce", "robots", "Robot",
+    "regressor", "inverse_dynamics", "forward_kinematics", "base_parameters",
+    "BaseParameters", "JointLimits", "joint_limits_from_urdf", "is_physically_consistent",
+    "Measurements", "load_measurements", "load_kuka_lwr4", "simulate_measurements",
+    "simulate_measurements_along", "Transmission", "FourierTrajectory", "design_excitation",
+    "minimise", "AbstractSolver", "SEDSABSO", "BSO", "LDWPSO", "Evosax", "BlackBox",
+    "L1Residual", "Result", "box_around", "iterations_for_budget", "evaluation_counts",
+    "identify", "Identification", "select_and_identify", "IdentificationReport",
+    "TorqueModel", "Estimator", "OLS", "WLS", "L1", "LevenbergMarquardt", "BoxSearch",
+    "PhysicallyConsistent", "validation_metrics", "Metrics", "cross_validate",
+    "select_model", "choose_prior_strength",
+]
+
+#: Old root names, kept with a warning through 0.3.x.
+__getattr__ = _deprecation.moved(__name__, {
+    "metrics": ("sedsabso_jax.identification._metrics",
+                "sedsabso_jax.validation_metrics and sedsabso_jax.Metrics"),
+})

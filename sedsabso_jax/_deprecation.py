@@ -7,6 +7,7 @@ import functools
 import importlib
 import sys
 import warnings
+from types import FrameType
 
 _INTERNAL = ("sedsabso_jax", "equinox")
 
@@ -15,7 +16,8 @@ def caller_stacklevel() -> int:
     """The ``stacklevel`` (for a ``warnings.warn`` in the calling function) of the first
     frame outside this package and equinox (whose module metaclass stands between a
     constructor call and ``__init__``): the user's line."""
-    frame, level = sys._getframe(1), 1
+    frame: FrameType | None = sys._getframe(1)
+    level = 1
     while frame is not None and frame.f_globals.get("__name__", "").startswith(_INTERNAL):
         frame, level = frame.f_back, level + 1
     return level
@@ -46,14 +48,39 @@ def renamed_arguments(cls, renamed: dict[str, str]):
     return cls
 
 
-def module_getattr(module_name: str, moved: dict[str, tuple[str, str]]):
-    """A module ``__getattr__`` that serves each deprecated ``name: (module, new_name)``
-    from its new place, with a warning."""
+def resolve(path: str):
+    """The object at the dotted ``path`` (``"sedsabso_jax.robots.rs010n"``): the longest
+    importable module prefix, then attributes."""
+    parts = path.split(".")
+    for k in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:k]))
+        except ImportError:
+            continue
+        for name in parts[k:]:
+            obj = getattr(obj, name)
+        return obj
+    raise ImportError(path)
+
+
+def moved(module_name: str, names: dict[str, str | tuple[str, str]],
+          module: str | None = None):
+    """A module ``__getattr__`` for names that moved: each ``old: "new.dotted.path"`` is
+    served from its new place with a warning naming it (``old: (path, advice)``: the
+    warning gives the advice instead). With ``module`` (a deprecated module path kept as
+    a shim), any other name is looked up there, with a warning."""
     def __getattr__(name: str):
-        if name not in moved:
-            raise AttributeError(f"module {module_name!r} has no attribute {name!r}")
-        where, new = moved[name]
-        warn(f"{module_name}.{name}", f"{where}.{new}")
-        return getattr(importlib.import_module(where), new)
+        if name in names:
+            where = names[name]
+            path, advice = (where, where) if isinstance(where, str) else where
+            warn(f"{module_name}.{name}", advice)
+            return resolve(path)
+        if module is not None and not name.startswith("__"):
+            target = importlib.import_module(module)
+            if hasattr(target, name):
+                warn(f"the module path {module_name}", f"the public names of sedsabso_jax "
+                     f"(the documentation's API pages); {name} is {module}.{name} now")
+                return getattr(target, name)
+        raise AttributeError(f"module {module_name!r} has no attribute {name!r}")
 
     return __getattr__

@@ -47,7 +47,10 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
 
 def write_text(path, text: str) -> Path:
     """Write ``text`` (UTF-8) to ``path`` atomically."""
-    return atomic_write(path, lambda f: f.write(text.encode("utf-8")))
+    def write(f: BinaryIO) -> None:
+        f.write(text.encode("utf-8"))
+
+    return atomic_write(path, write)
 
 
 def jsonable(value):

@@ -16,6 +16,8 @@ centre-of-mass coordinates where first moments belong.
 
 from __future__ import annotations
 
+__all__ = ["TABLE2", "TABLE3_DEG", "TABLE4", "TABLE5_THEORETICAL", "TABLE5_IDENTIFIED"]
+
 #: Table 2 (RS010N, links 1-3): inertia about the link-frame origin, in the link frame, in
 #: kg m^2; mass in kg; centre of mass in mm (link frame); friction zero. Kept as published,
 #: although ``Ixx`` of link 2 (-10.02) is not physically possible.

@@ -13,15 +13,15 @@ import pytest
 
 import sedsabso_jax as sj
 from sedsabso_jax import cli
-from sedsabso_jax.identification.model import TorqueModel
-from sedsabso_jax.identification.validation import (
+from sedsabso_jax.identification._model import TorqueModel
+from sedsabso_jax.identification._validation import (
     choose_prior_strength,
     cross_validate,
     phase_folds,
     repeat_period,
     select_model,
 )
-from sedsabso_jax.measurements.transmission import Transmission
+from sedsabso_jax.measurements._transmission import Transmission
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "data"))
 import real_robots  # noqa: E402  (the repository's data folder, not the package)

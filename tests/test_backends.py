@@ -16,14 +16,14 @@ import numpy as np
 import pytest
 
 import sedsabso_jax as sj
-from sedsabso_jax.optim import driver
-from sedsabso_jax.optim import fitness as l1
-from sedsabso_jax.optim.swarm import uniforms
+from sedsabso_jax.optim import _driver as driver
+from sedsabso_jax.optim import _fitness as l1
+from sedsabso_jax.optim._swarm import uniforms
 
 # the modules (the packages re-export functions of the same names)
-reg = importlib.import_module("sedsabso_jax.dynamics.regressor")
-design = importlib.import_module("sedsabso_jax.excitation.design")
-exfit = importlib.import_module("sedsabso_jax.excitation.fitness")
+reg = importlib.import_module("sedsabso_jax.dynamics._regressor")
+design = importlib.import_module("sedsabso_jax.excitation._design")
+exfit = importlib.import_module("sedsabso_jax.excitation._fitness")
 
 
 @pytest.fixture
@@ -175,7 +175,7 @@ def test_dynamics_and_trajectory_products_ask_for_full_precision():
     found = _precisions(lambda q: reg.unchecked_regressor(robot, q, q, q), q)
     found += _precisions(lambda p, q: sj.inverse_dynamics(robot, p, q, q, q),
                          jnp.asarray(robot.params), np.zeros((4, 3)))
-    from sedsabso_jax.excitation.trajectory import evaluate
+    from sedsabso_jax.excitation._trajectory import evaluate
     a = jnp.ones((3, 5), jnp.float32)
     found += _precisions(lambda a, c: evaluate(a, a, a[:, 0], jnp.arange(1.0, 6.0), c, c),
                          a, jnp.ones((7, 5), jnp.float32))

@@ -12,7 +12,7 @@ import pytest
 import sedsabso_jax as sj
 from sedsabso_jax import L1Residual
 from sedsabso_jax import baselines as bl
-from sedsabso_jax.dynamics.base_parameters import random_states
+from sedsabso_jax.dynamics._base_parameters import random_states
 
 
 def eq17(W, tau, x):

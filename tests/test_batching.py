@@ -6,7 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import sedsabso_jax as sj
-from sedsabso_jax.dynamics.regressor import _regressor_jit
+from sedsabso_jax.dynamics._regressor import _regressor_jit
 
 
 def test_batched_equals_unbatched(rng):
@@ -66,7 +66,7 @@ def test_differentiable_in_q(rng):
 
     robot = sj.robots.rs010n()
     q, qd, qdd = rng.normal(size=(3, 3))
-    from sedsabso_jax.dynamics.regressor import unchecked_regressor
+    from sedsabso_jax.dynamics._regressor import unchecked_regressor
 
     def f(q):
         return jnp.sum(unchecked_regressor(robot, q, qd, qdd) ** 2)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.stats
 
-from sedsabso_jax.compare import statistics as S
+from sedsabso_jax.compare import _statistics as S
 
 
 def test_a12_counts_pairs():

@@ -66,7 +66,7 @@ def _same_cv(a, b):
 def test_validation_keyword_forms(recording):
     """cross_validate, select_model and choose_prior_strength with 0.2's (robot, times, q,
     qd, qdd, tau, **identify_settings): a warning at the caller's line, the new result."""
-    from sedsabso_jax.identification import validation as V
+    from sedsabso_jax.identification import _validation as V
 
     robot, data, arrays = recording
     limits = [100.0, 100.0, 50.0]
@@ -103,8 +103,8 @@ def test_validation_keyword_forms(recording):
 
 @pytest.mark.parametrize("module, old, new", [
     ("sedsabso_jax.excitation", "search_box", "coefficient_box"),
-    ("sedsabso_jax.dynamics.robots", "KUKA_LWR4_URDF", "kuka_lwr4_urdf"),
-    ("sedsabso_jax.dynamics.robots", "RS010N_TABLE2", None),
+    ("sedsabso_jax.dynamics._robots", "KUKA_LWR4_URDF", "kuka_lwr4_urdf"),
+    ("sedsabso_jax.dynamics._robots", "RS010N_TABLE2", None),
     ("sedsabso_jax.identification", "Model", "TorqueModel"),
 ])
 def test_moved_module_names(module, old, new):

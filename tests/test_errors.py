@@ -7,7 +7,7 @@ import pytest
 from conftest import random_urdf
 
 import sedsabso_jax as sj
-from sedsabso_jax.dynamics.urdf import URDFError
+from sedsabso_jax.dynamics._urdf import URDFError
 
 ONE_JOINT = """<robot name="r"><link name="a"/><link name="b"/>
 <joint name="j" type="{kind}"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/>

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import sedsabso_jax as sj
-from sedsabso_jax.optim.budget import evaluation_counts, iterations_for_budget
-from sedsabso_jax.optim.external import Evosax
+from sedsabso_jax.optim._budget import evaluation_counts, iterations_for_budget
+from sedsabso_jax.optim._external import Evosax
 
 pytest.importorskip("evosax")
 

@@ -13,8 +13,8 @@ import textwrap
 import pytest
 
 IMPORT_EVERYTHING = """
-import sedsabso_jax, sedsabso_jax.cli, sedsabso_jax.compare.run, sedsabso_jax.compare.report
-import sedsabso_jax.reproduce.experiment, sedsabso_jax.reproduce.report
+import sedsabso_jax, sedsabso_jax.cli, sedsabso_jax.compare._run, sedsabso_jax.compare._report
+import sedsabso_jax.reproduce._experiment, sedsabso_jax.reproduce._report
 """
 
 

@@ -1,6 +1,9 @@
-"""The package's layering, read from the source: every import (also those inside functions)
-points down the layers, no two modules import each other (directly or around a cycle),
-nothing inside imports the package root, and no module takes another's private names."""
+"""The package's layering and its public API, read from the source: every import (also
+those inside functions) points down the layers, no two modules import each other (directly
+or around a cycle), nothing inside imports the package root, and no module takes another's
+private names. Public and private apart: every implementation module is private
+(``_name.py``), the public names are the ``__all__`` of the root and of the public
+namespaces, each name in one place, and the benchmarks and notebooks use nothing else."""
 
 from __future__ import annotations
 
@@ -17,7 +20,7 @@ PACKAGE = "sedsabso_jax"
 LAYERS = {
     "paper": 0, "_output": 0, "_deprecation": 0, "_version": 0, "_x64": 0,
     "dynamics": 1, "optim": 1,
-    "measurements": 2, "excitation": 2,
+    "measurements": 2, "excitation": 2, "robots": 2, "baselines": 2,
     "identification": 3,
     "reproduce": 4,
     "compare": 5,
@@ -123,6 +126,96 @@ def test_no_import_cycle():
 def test_the_checks_see_the_imports():
     """The graph is not empty by accident: known edges are found."""
     pairs = {(s, d) for s, d, _, _ in EDGES}
-    assert ("sedsabso_jax.identification.identify", "sedsabso_jax.optim.linear") in pairs
-    assert ("sedsabso_jax.dynamics.robots", "sedsabso_jax.paper") in pairs
-    assert ("sedsabso_jax.cli", "sedsabso_jax.reproduce.experiment") in pairs  # in a function
+    assert ("sedsabso_jax.identification._identify", "sedsabso_jax.optim._linear") in pairs
+    assert ("sedsabso_jax.dynamics._robots", "sedsabso_jax.paper") in pairs
+    assert ("sedsabso_jax.cli._main", "sedsabso_jax.reproduce._experiment") in pairs  # in a function
+
+
+# ------------------------------------------------------------------------ public API
+import importlib  # noqa: E402
+import json  # noqa: E402
+import re  # noqa: E402
+
+#: The public namespaces (each with ``__all__``); the package root first.
+NAMESPACES = ("sedsabso_jax", "sedsabso_jax.robots", "sedsabso_jax.baselines",
+              "sedsabso_jax.paper", "sedsabso_jax.dynamics", "sedsabso_jax.optim",
+              "sedsabso_jax.measurements", "sedsabso_jax.excitation",
+              "sedsabso_jax.identification", "sedsabso_jax.compare", "sedsabso_jax.reproduce",
+              "sedsabso_jax.cli")
+#: 0.2's documented module paths, kept as deprecation shims through 0.3.x.
+SHIMS = {"sedsabso_jax.identification.validation", "sedsabso_jax.measurements.transmission",
+         "sedsabso_jax.reproduce.experiment", "sedsabso_jax.dynamics.robots"}
+
+
+def test_implementation_modules_are_private():
+    public = {m for m in MODULES if not _is_package(m)
+              and not m.rpartition(".")[2].startswith("_")} - SHIMS
+    assert public == {f"sedsabso_jax.{n.rpartition('.')[2]}" for n in NAMESPACES[1:4]}, public
+
+
+@pytest.mark.parametrize("name", NAMESPACES)
+def test_namespace_exports_exactly_its_all(name):
+    module = importlib.import_module(name)
+    names = module.__all__
+    assert len(names) == len(set(names)), f"{name}: a name twice in __all__"
+    for n in names:
+        assert hasattr(module, n), f"{name}.{n} in __all__ but missing"
+    submodules = {m.rpartition(".")[2] for m in MODULES if m.startswith(name + ".")}
+    extra = {n for n in vars(module) if not n.startswith("_") and n != "annotations"
+             and n not in names and n not in submodules}
+    assert not extra, f"{name}: public attributes outside __all__: {sorted(extra)}"
+
+
+def test_one_import_path_per_public_name():
+    """No function, class or module is exported by two namespaces (two namespaces may
+    each have their own ``Settings``, but not the same one)."""
+    import inspect
+
+    namespaces = set(NAMESPACES)
+    seen: dict[int, str] = {}
+    for name in NAMESPACES:
+        module = importlib.import_module(name)
+        for n in module.__all__:
+            obj = getattr(module, n)
+            if f"{name}.{n}" in namespaces or n.startswith("__") or not (
+                    inspect.isclass(obj) or inspect.isroutine(obj)):
+                continue
+            assert id(obj) not in seen, f"{n} is public as {seen[id(obj)]} and {name}.{n}"
+            seen[id(obj)] = f"{name}.{n}"
+    assert {"sedsabso_jax.minimise", "sedsabso_jax.identify", "sedsabso_jax.SEDSABSO",
+            "sedsabso_jax.robots.rs010n"} <= set(seen.values())
+
+
+def test_old_paths_warn_and_name_the_new_one():
+    import sedsabso_jax as sj
+    from sedsabso_jax import optim
+
+    with pytest.warns(DeprecationWarning, match="use sedsabso_jax.minimise"):
+        assert optim.minimise is sj.minimise
+    shim = importlib.import_module("sedsabso_jax.identification.validation")
+    with pytest.warns(DeprecationWarning, match="use sedsabso_jax.select_model"):
+        assert shim.select_model is sj.select_model
+    with pytest.raises(AttributeError):
+        optim.no_such_name  # noqa: B018
+
+
+REPO = ROOT.parent
+
+
+def _private_uses(source: str) -> list[str]:
+    """``sedsabso_jax`` imports or attribute paths through a private name."""
+    found = re.findall(r"sedsabso_jax(?:\.\w+)*\._\w+", source)
+    for m in re.finditer(r"from (sedsabso_jax[\w.]*) import \(?([^)\n]*)", source):
+        found += [f"{m.group(1)}.{n.split()[0]}" for n in m.group(2).split(",")
+                  if n.strip().startswith("_")]
+    return found
+
+
+@pytest.mark.parametrize("path", sorted((REPO / "benchmarks").glob("*.py"))
+                         + sorted((REPO / "notebooks").glob("*.ipynb")), ids=lambda p: p.name)
+def test_benchmarks_and_notebooks_use_the_public_api(path):
+    text = path.read_text()
+    if path.suffix == ".ipynb":
+        text = "\n".join("".join(c["source"]) for c in json.loads(text)["cells"]
+                         if c["cell_type"] == "code")
+    assert not _private_uses(text), _private_uses(text)

@@ -1,4 +1,4 @@
-"""The one least-squares core (``optim/linear.py``) against numpy/scipy, on problems whose
+"""The one least-squares core (``optim/_linear.py``) against numpy/scipy, on problems whose
 columns differ in scale by many orders of magnitude, rank deficient, ill-conditioned, with
 zero columns or fewer rows than columns; and the box rule."""
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import sedsabso_jax as sj
-from sedsabso_jax.optim.linear import ILL_RTOL, RANK_RTOL, factorize
+from sedsabso_jax.optim._linear import ILL_RTOL, RANK_RTOL, factorize
 
 
 def scaled_problem(rng, m=200, d=6):

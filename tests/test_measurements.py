@@ -14,7 +14,7 @@ import pytest
 import scipy.signal
 
 import sedsabso_jax as sj
-from sedsabso_jax.identification.metrics import validation_metrics
+from sedsabso_jax.identification._metrics import validation_metrics
 from sedsabso_jax.measurements import (
     DEFAULT_CUTOFF_HZ,
     Measurements,

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sedsabso_jax.identification.metrics import Metrics, validation_metrics
+from sedsabso_jax.identification._metrics import Metrics, validation_metrics
 
 # 4 samples, 2 joints; errors +-0.1 on joint 1 and +-1 on joint 2.
 MEASURED = np.array([[1.0, 10.0], [-1.0, 20.0], [3.0, 30.0], [1.0, 20.0]])

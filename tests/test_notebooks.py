@@ -67,6 +67,10 @@ def test_notebook_runs(path, tmp_path, monkeypatch):
         assert not any(line.lstrip().startswith(("%", "!")) for line in src.splitlines()), (
             f"{path.name} code cell {i}: IPython magics or shell escapes cannot run here")
     namespace = {"__name__": "__main__"}
+    import jax
+
+    # as in a fresh kernel: 64-bit mode off until the notebook turns it on itself
+    jax.config.update("jax_enable_x64", False)
     try:
         for i, src in enumerate(cells):  # in order, one namespace: like a kernel
             name = f"{path.name} code cell {i}"
@@ -74,4 +78,5 @@ def test_notebook_runs(path, tmp_path, monkeypatch):
             exec(compile(src, name, "exec"), namespace)
     finally:
         plt.close("all")
+        jax.config.update("jax_enable_x64", True)
     assert namespace.get("SMALL") is True, f"{path.name}: the budget switch SMALL is not set"

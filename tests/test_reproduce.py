@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from sedsabso_jax import cli
-from sedsabso_jax.reproduce import experiment
+from sedsabso_jax.reproduce import _experiment as experiment
 
 SMALL = ["--runs", "2", "--iterations", "30", "--samples", "200", "--design-iterations", "5"]
 FILES = ("table4.md", "table5.md", "fig5_population.png", "fig6_convergence.png",

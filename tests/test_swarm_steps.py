@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import sedsabso_jax as sj
-from sedsabso_jax.optim.swarm import SwarmState, initial_state, set_active, shrink
+from sedsabso_jax.optim._swarm import SwarmState, initial_state, set_active, shrink
 
 D, SLOTS, M = 3, 5, 8
 TEMPERATURE = 0.5  # of the same order as the candidates' fitness differences

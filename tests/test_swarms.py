@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import sedsabso_jax as sj
-from sedsabso_jax.optim.sedsabso import metropolis_accept
-from sedsabso_jax.optim.swarm import phases, uniforms
+from sedsabso_jax.optim._sedsabso import metropolis_accept
+from sedsabso_jax.optim._swarm import phases, uniforms
 
 # SEDSABSO with 2 compiled phases keeps the suite's compile time down; the phase logic is
 # tested on its own below.
@@ -262,7 +262,7 @@ def test_runs_shard_over_devices():
 
 
 def test_one_run_is_timed_without_a_second_compilation():
-    from sedsabso_jax.optim.driver import time_one_of_many
+    from sedsabso_jax.optim._driver import time_one_of_many
 
     box = (-2 * np.ones(3), 2 * np.ones(3))
     solver = sj.BSO(n_beetles=9)

@@ -13,7 +13,7 @@ from conftest import random_dh
 
 import sedsabso_jax as sj
 from sedsabso_jax import cli
-from sedsabso_jax.dynamics.urdf_writer import to_urdf
+from sedsabso_jax.dynamics._urdf_writer import to_urdf
 
 
 def pin_torques(path, q, qd, qdd):

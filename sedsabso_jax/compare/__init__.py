@@ -3,10 +3,37 @@ evaluations, many seeded runs, a standard suite, statistics. What ``sedsabso-jax
 runs and writes. Builds on every layer below it (the identification problems come from
 ``reproduce``'s experiment and the real KUKA data).
 
-- :mod:`.problems`: BBOB f1-f24 (evosax's JAX implementation) and the identification
+- :mod:`._problems`: BBOB f1-f24 (evosax's JAX implementation) and the identification
   problems, with their known optima;
-- :mod:`.statistics`: median / IQR, Mann-Whitney U with Holm's correction, Vargha-Delaney
+- :mod:`._statistics`: median / IQR, Mann-Whitney U with Holm's correction, Vargha-Delaney
   A12, run lengths and their ECDF;
-- :mod:`.run`: the runs, one resumable JSON file per problem;
-- :mod:`.report`: report.md, summary.json and the ECDF figures.
+- :mod:`._run`: the runs, one resumable JSON file per problem;
+- :mod:`._report`: report.md, summary.json and the ECDF figures.
 """
+
+from __future__ import annotations
+
+from ._problems import SUITES as SUITES
+from ._problems import Problem as Problem
+from ._problems import load_problem as load_problem
+from ._problems import problem_names as problem_names
+from ._report import write_report as write_report
+from ._run import DEFAULT_ALGORITHMS as DEFAULT_ALGORITHMS
+from ._run import DEFAULT_BUDGET as DEFAULT_BUDGET
+from ._run import Settings as Settings
+from ._run import compare as compare
+from ._run import parse_budget as parse_budget
+from ._run import run_problem as run_problem
+from ._run import solver_for as solver_for
+from ._statistics import a12 as a12
+from ._statistics import ecdf as ecdf
+from ._statistics import holm as holm
+from ._statistics import pairwise as pairwise
+from ._statistics import run_lengths as run_lengths
+from ._statistics import summary as summary
+
+__all__ = [
+    "Settings", "compare", "run_problem", "solver_for", "parse_budget",
+    "DEFAULT_ALGORITHMS", "DEFAULT_BUDGET", "Problem", "problem_names", "load_problem",
+    "SUITES", "summary", "a12", "holm", "pairwise", "run_lengths", "ecdf", "write_report",
+]

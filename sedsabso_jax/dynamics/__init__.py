@@ -1,25 +1,42 @@
-"""Robot dynamics, the first foundation: robot models, the exact regressor, base parameters.
+"""Robot dynamics beyond the package root's names: the first foundation (robot models, the
+exact regressor, base parameters), which knows nothing of optimisers, measurements or
+identification. The common names (``Robot``, ``regressor``, ``inverse_dynamics``,
+``forward_kinematics``, ``base_parameters``, ``BaseParameters``, ``JointLimits``,
+``joint_limits_from_urdf``, ``is_physically_consistent``) are ``sedsabso_jax``'s; the
+built-in robots are :mod:`sedsabso_jax.robots`."""
 
-Nothing here knows about optimisers, measurements or identification.
+from __future__ import annotations
 
-- :mod:`.robot`: the :class:`Robot` pytree (geometry, parameters, gravity);
-- :mod:`.robots`: constructors (RS010N, modified and standard DH, URDF, KUKA LWR4+);
-- :mod:`.urdf`: reading a URDF into a serial chain;
-- :mod:`.limits`: joint limits (Table 3, URDF ``<limit>``);
-- :mod:`.spatial`, :mod:`.inertia`: rigid transforms; inertial parameters, pseudo-inertia;
-- :mod:`.kinematics`: forward kinematics;
-- :mod:`.regressor`: ``tau = Y(q, qd, qdd) P`` (Eq. 2), inverse dynamics;
-- :mod:`.base_parameters`: the identifiable combinations (Eq. 3-4).
-"""
+from .. import _deprecation
+from ._base_parameters import random_states as random_states
+from ._inertia import from_pseudo_inertia as from_pseudo_inertia
+from ._inertia import params_from_com as params_from_com
+from ._inertia import pseudo_inertia as pseudo_inertia
+from ._kinematics import link_poses as link_poses
+from ._limits import joint_limits as joint_limits
+from ._regressor import chunk_size as chunk_size
+from ._regressor import unchecked_regressor as unchecked_regressor
+from ._robot import LINK_PARAMETERS as LINK_PARAMETERS
+from ._robot import N_LINK_PARAMETERS as N_LINK_PARAMETERS
+from ._urdf import URDFError as URDFError
+from ._urdf_writer import to_urdf as to_urdf
 
-from . import robots as robots
-from .base_parameters import BaseParameters as BaseParameters
-from .base_parameters import base_parameters as base_parameters
-from .inertia import is_physically_consistent as is_physically_consistent
-from .kinematics import forward_kinematics as forward_kinematics
-from .limits import JointLimits as JointLimits
-from .limits import joint_limits_from_urdf as joint_limits_from_urdf
-from .regressor import inverse_dynamics as inverse_dynamics
-from .regressor import regressor as regressor
-from .robot import Robot as Robot
-from .urdf import URDFError as URDFError
+__all__ = [
+    "URDFError", "unchecked_regressor", "chunk_size", "random_states", "joint_limits",
+    "pseudo_inertia", "from_pseudo_inertia", "params_from_com", "to_urdf", "link_poses",
+    "LINK_PARAMETERS", "N_LINK_PARAMETERS",
+]
+
+#: Names that moved to the package root (0.3), kept with a warning through 0.3.x.
+__getattr__ = _deprecation.moved(__name__, {
+    "Robot": "sedsabso_jax.Robot",
+    "regressor": "sedsabso_jax.regressor",
+    "inverse_dynamics": "sedsabso_jax.inverse_dynamics",
+    "forward_kinematics": "sedsabso_jax.forward_kinematics",
+    "base_parameters": "sedsabso_jax.base_parameters",
+    "BaseParameters": "sedsabso_jax.BaseParameters",
+    "JointLimits": "sedsabso_jax.JointLimits",
+    "joint_limits_from_urdf": "sedsabso_jax.joint_limits_from_urdf",
+    "is_physically_consistent": "sedsabso_jax.is_physically_consistent",
+    "robots": "sedsabso_jax.robots",
+})

@@ -1,28 +1,33 @@
-"""Excitation trajectories and their design (the paper's Eq. 5-9). Builds on
-:mod:`sedsabso_jax.dynamics` (regressor, limits) and :mod:`sedsabso_jax.optim` (swarms).
+"""Excitation design beyond the package root's names (``FourierTrajectory``,
+``design_excitation``): the checks against joint limits, the design fitness of Eq. 9 and
+its parts (the paper's Eq. 5-9). Builds on :mod:`sedsabso_jax.dynamics` and
+:mod:`sedsabso_jax.optim`."""
 
-- :mod:`.trajectory`: :class:`FourierTrajectory` (Eq. 5-7) and its file format;
-- :mod:`.checks`: :func:`violations`, :func:`check_trajectory` against joint limits;
-- :mod:`.fitness`: Eq. 9 (:func:`design_fitness`), :func:`condition_number`;
-- :mod:`.design`: :func:`design_excitation`, :func:`coefficient_box`, the random baseline.
-"""
+from __future__ import annotations
 
 from .. import _deprecation
-from ..dynamics.limits import JointLimits as JointLimits
-from ..dynamics.limits import joint_limits_from_urdf as joint_limits_from_urdf
-from .checks import check_trajectory as check_trajectory
-from .checks import violations as violations
-from .design import ExcitationDesign as ExcitationDesign
-from .design import coefficient_box as coefficient_box
-from .design import default_solver as default_solver
-from .design import design_excitation as design_excitation
-from .fitness import PENALTY as PENALTY
-from .fitness import DesignProblem as DesignProblem
-from .fitness import condition_number as condition_number
-from .fitness import design_fitness as design_fitness
-from .fitness import sampling_margin as sampling_margin
-from .trajectory import FourierTrajectory as FourierTrajectory
+from ._checks import check_trajectory as check_trajectory
+from ._checks import violations as violations
+from ._design import ExcitationDesign as ExcitationDesign
+from ._design import coefficient_box as coefficient_box
+from ._design import default_solver as default_solver
+from ._fitness import PENALTY as PENALTY
+from ._fitness import DesignProblem as DesignProblem
+from ._fitness import condition_number as condition_number
+from ._fitness import design_fitness as design_fitness
+from ._fitness import sampling_margin as sampling_margin
 
-__getattr__ = _deprecation.module_getattr(__name__, {
-    "search_box": ("sedsabso_jax.excitation.design", "coefficient_box"),
+__all__ = [
+    "ExcitationDesign", "coefficient_box", "default_solver", "check_trajectory",
+    "violations", "DesignProblem", "design_fitness", "condition_number", "sampling_margin",
+    "PENALTY",
+]
+
+#: Names that moved to the package root (0.3), kept with a warning through 0.3.x.
+__getattr__ = _deprecation.moved(__name__, {
+    "FourierTrajectory": "sedsabso_jax.FourierTrajectory",
+    "design_excitation": "sedsabso_jax.design_excitation",
+    "JointLimits": "sedsabso_jax.JointLimits",
+    "joint_limits_from_urdf": "sedsabso_jax.joint_limits_from_urdf",
+    "search_box": "sedsabso_jax.excitation.coefficient_box",
 })

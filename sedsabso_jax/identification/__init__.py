@@ -1,45 +1,60 @@
-"""Identification of a robot's parameters from joint data, and how well the result
-predicts torques. Builds on :mod:`sedsabso_jax.dynamics` and :mod:`sedsabso_jax.optim`.
+"""Identification beyond the package root's names (``identify``, ``select_and_identify``,
+the estimators ``OLS``, ``WLS``, ``L1``, ``LevenbergMarquardt``, ``BoxSearch``,
+``PhysicallyConsistent`` and their base ``Estimator``, ``TorqueModel``,
+``Identification``, ``IdentificationReport``, ``cross_validate``, ``select_model``,
+``choose_prior_strength``, ``validation_metrics``, ``Metrics``): what writing a new
+estimator needs, the cross-validation's parts and results, and the default candidates.
+Builds on :mod:`sedsabso_jax.dynamics`, :mod:`sedsabso_jax.optim` and
+:mod:`sedsabso_jax.measurements`."""
 
-- :mod:`.model`: the torque model (base regressor + friction terms), ``TorqueModel.of``;
-- :mod:`.fitting`: what every estimator shares (the rows, the weighting, the interface);
-- :mod:`.estimators`: OLS, WLS, L1, LevenbergMarquardt, BoxSearch, PhysicallyConsistent;
-- :mod:`.identify`: :func:`identify` (robot, data, estimator, model);
-- :mod:`.physical`: the physically consistent fit (LMI, Clarabel);
-- :mod:`.metrics`: :func:`validation_metrics` (RMS, NRMS over range and limits);
-- :mod:`.folds`, :mod:`.validation`: cross-validation over the motion's phase, the
-  choice of a model and of the pull to the prior;
-- :mod:`.auto`: :func:`select_and_identify`, the command's default as one call;
-- :mod:`.report`: what ``sedsabso-jax identify`` prints, writes and plots;
-- :mod:`.legacy`: 0.2's keyword forms.
-"""
+from __future__ import annotations
 
 from .. import _deprecation
-from ..dynamics.inertia import is_physically_consistent as is_physically_consistent
-from .auto import estimator_candidates as estimator_candidates
-from .auto import select_and_identify as select_and_identify
-from .estimators import L1 as L1
-from .estimators import OLS as OLS
-from .estimators import WLS as WLS
-from .estimators import BoxSearch as BoxSearch
-from .estimators import LevenbergMarquardt as LevenbergMarquardt
-from .estimators import PhysicallyConsistent as PhysicallyConsistent
-from .fitting import Estimator as Estimator
-from .fitting import EstimatorFit as EstimatorFit
-from .fitting import FitProblem as FitProblem
-from .identify import METHODS as METHODS
-from .identify import Identification as Identification
-from .identify import identify as identify
-from .metrics import Metrics as Metrics
-from .metrics import nrms_over_limits as nrms_over_limits
-from .metrics import validation_metrics as validation_metrics
-from .model import FRICTION_TERMS as FRICTION_TERMS
-from .model import TorqueModel as TorqueModel
-from .report import IdentificationReport as IdentificationReport
-from .validation import choose_prior_strength as choose_prior_strength
-from .validation import cross_validate as cross_validate
-from .validation import select_model as select_model
+from ._auto import estimator_candidates as estimator_candidates
+from ._fitting import EstimatorFit as EstimatorFit
+from ._fitting import FitProblem as FitProblem
+from ._fitting import weigh as weigh
+from ._folds import DEFAULT_FOLDS as DEFAULT_FOLDS
+from ._folds import CrossValidation as CrossValidation
+from ._folds import phase_folds as phase_folds
+from ._folds import repeat_period as repeat_period
+from ._metrics import nrms_over_limits as nrms_over_limits
+from ._model import FRICTION_TERMS as FRICTION_TERMS
+from ._report import figure_torques as figure_torques
+from ._validation import ESTIMATOR_CANDIDATES as ESTIMATOR_CANDIDATES
+from ._validation import FRICTION_CANDIDATES as FRICTION_CANDIDATES
+from ._validation import PRIOR_STRENGTHS as PRIOR_STRENGTHS
+from ._validation import PriorSelection as PriorSelection
+from ._validation import Selection as Selection
 
-__getattr__ = _deprecation.module_getattr(__name__, {
-    "Model": ("sedsabso_jax.identification.model", "TorqueModel"),
+__all__ = [
+    "FitProblem", "EstimatorFit", "weigh", "CrossValidation", "phase_folds",
+    "repeat_period", "DEFAULT_FOLDS", "Selection", "PriorSelection", "FRICTION_CANDIDATES",
+    "ESTIMATOR_CANDIDATES", "PRIOR_STRENGTHS", "estimator_candidates", "nrms_over_limits",
+    "FRICTION_TERMS", "figure_torques",
+]
+
+#: Names that moved to the package root (0.3), kept with a warning through 0.3.x.
+__getattr__ = _deprecation.moved(__name__, {
+    "identify": "sedsabso_jax.identify",
+    "select_and_identify": "sedsabso_jax.select_and_identify",
+    "Identification": "sedsabso_jax.Identification",
+    "IdentificationReport": "sedsabso_jax.IdentificationReport",
+    "TorqueModel": "sedsabso_jax.TorqueModel",
+    "Estimator": "sedsabso_jax.Estimator",
+    "OLS": "sedsabso_jax.OLS",
+    "WLS": "sedsabso_jax.WLS",
+    "L1": "sedsabso_jax.L1",
+    "LevenbergMarquardt": "sedsabso_jax.LevenbergMarquardt",
+    "BoxSearch": "sedsabso_jax.BoxSearch",
+    "PhysicallyConsistent": "sedsabso_jax.PhysicallyConsistent",
+    "validation_metrics": "sedsabso_jax.validation_metrics",
+    "Metrics": "sedsabso_jax.Metrics",
+    "cross_validate": "sedsabso_jax.cross_validate",
+    "select_model": "sedsabso_jax.select_model",
+    "choose_prior_strength": "sedsabso_jax.choose_prior_strength",
+    "is_physically_consistent": "sedsabso_jax.is_physically_consistent",
+    "Model": "sedsabso_jax.TorqueModel",
+    "METHODS": ("sedsabso_jax.identification._legacy.METHODS",
+                "sedsabso_jax.Estimator.registered()"),
 })

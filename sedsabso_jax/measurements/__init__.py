@@ -1,19 +1,26 @@
-"""Joint measurements: the container, file formats, signal processing, loading and
-simulation. Builds on :mod:`sedsabso_jax.dynamics` only (simulated torques).
+"""Joint measurements beyond the package root's names (``Measurements``,
+``load_measurements``, ``load_kuka_lwr4``, ``simulate_measurements``,
+``simulate_measurements_along``, ``Transmission``): the signal processing the loaders
+use, and the transmission's coupled motors. Builds on :mod:`sedsabso_jax.dynamics` only."""
 
-- :mod:`.container`: :class:`Measurements` (checked, read-only arrays);
-- :mod:`.formats`: ``.npz`` and ``.csv`` reading and writing;
-- :mod:`.signal`: zero-phase low-pass, velocities and accelerations from positions;
-- :mod:`.load`: :func:`load_measurements`, :func:`load_kuka_lwr4`;
-- :mod:`.simulate`: :func:`simulate_measurements`, :func:`simulate_measurements_along`.
-"""
+from __future__ import annotations
 
-from .container import Measurements as Measurements
-from .load import load_kuka_lwr4 as load_kuka_lwr4
-from .load import load_measurements as load_measurements
-from .signal import DEFAULT_CUTOFF_HZ as DEFAULT_CUTOFF_HZ
-from .signal import differentiate as differentiate
-from .signal import lowpass as lowpass
-from .signal import median_rate as median_rate
-from .simulate import simulate_measurements as simulate_measurements
-from .simulate import simulate_measurements_along as simulate_measurements_along
+from .. import _deprecation
+from ._signal import DEFAULT_CUTOFF_HZ as DEFAULT_CUTOFF_HZ
+from ._signal import differentiate as differentiate
+from ._signal import lowpass as lowpass
+from ._signal import median_rate as median_rate
+from ._transmission import coupled_motors as coupled_motors
+
+__all__ = [
+    "DEFAULT_CUTOFF_HZ", "lowpass", "differentiate", "median_rate", "coupled_motors",
+]
+
+#: Names that moved to the package root (0.3), kept with a warning through 0.3.x.
+__getattr__ = _deprecation.moved(__name__, {
+    "Measurements": "sedsabso_jax.Measurements",
+    "load_measurements": "sedsabso_jax.load_measurements",
+    "load_kuka_lwr4": "sedsabso_jax.load_kuka_lwr4",
+    "simulate_measurements": "sedsabso_jax.simulate_measurements",
+    "simulate_measurements_along": "sedsabso_jax.simulate_measurements_along",
+})

@@ -1,32 +1,45 @@
-"""Box optimisers, the second foundation: SEDSABSO, BSO and LDWPSO as vectorised JAX
-kernels, one driver and result type, and the baselines they are judged against.
+"""Optimisers beyond the package root's names: the second foundation, which knows nothing
+of robots (a problem is a fitness over a box). The common names (``minimise``,
+``AbstractSolver``, ``SEDSABSO``, ``BSO``, ``LDWPSO``, ``Evosax``, ``BlackBox``,
+``L1Residual``, ``Result``, ``box_around``, ``iterations_for_budget``,
+``evaluation_counts``) are ``sedsabso_jax``'s; the least-squares and L1 baselines are
+:mod:`sedsabso_jax.baselines`. Here: what a new solver or a study of the swarms needs."""
 
-Nothing here knows about robots: a problem is a fitness over a box.
+from __future__ import annotations
 
-- :mod:`.fitness`: black-box ``f(x, args)`` and the paper's Eq. 17 as a linear embedding;
-- :mod:`.swarm`: the solver interface, population state and bookkeeping;
-- :mod:`.driver`: :func:`minimise` (compiled, many runs per call, several devices);
-- :mod:`.bso`, :mod:`.sedsabso`, :mod:`.ldwpso`: one algorithm each; :mod:`.registry`;
-- :mod:`.result`: the one :class:`Result` type;
-- :mod:`.external`: any evosax strategy through :func:`minimise` (:class:`Evosax`);
-- :mod:`.budget`: equal budgets in fitness evaluations;
-- :mod:`.box`: bounds and the box around a point;
-- :mod:`.linear`: the least-squares and least-absolute-deviation cores;
-- :mod:`.baselines`: OLS, optimistix LM / GN, the exact L1 optimum of Eq. 17.
-"""
+from .. import _deprecation
+from ._bso import BeetleSwarm as BeetleSwarm
+from ._driver import time_one_of_many as time_one_of_many
+from ._external import EvosaxState as EvosaxState
+from ._external import evosax_names as evosax_names
+from ._linear import Factorization as Factorization
+from ._linear import factorize as factorize
+from ._linear import l1_solve as l1_solve
+from ._linear import l1_solve_box as l1_solve_box
+from ._registry import SWARMS as SWARMS
+from ._sedsabso import metropolis_accept as metropolis_accept
+from ._swarm import AbstractSwarm as AbstractSwarm
+from ._swarm import SwarmState as SwarmState
 
-from . import baselines as baselines
-from .box import box_around as box_around
-from .bso import BSO as BSO
-from .budget import evaluation_counts as evaluation_counts
-from .budget import iterations_for_budget as iterations_for_budget
-from .driver import minimise as minimise
-from .external import Evosax as Evosax
-from .fitness import BlackBox as BlackBox
-from .fitness import L1Residual as L1Residual
-from .ldwpso import LDWPSO as LDWPSO
-from .registry import SWARMS as SWARMS
-from .result import Result as Result
-from .sedsabso import SEDSABSO as SEDSABSO
-from .solver import AbstractSolver as AbstractSolver
-from .swarm import AbstractSwarm as AbstractSwarm
+__all__ = [
+    "AbstractSwarm", "SwarmState", "BeetleSwarm", "EvosaxState", "evosax_names", "SWARMS",
+    "metropolis_accept", "time_one_of_many", "Factorization", "factorize", "l1_solve",
+    "l1_solve_box",
+]
+
+#: Names that moved to the package root (0.3), kept with a warning through 0.3.x.
+__getattr__ = _deprecation.moved(__name__, {
+    "minimise": "sedsabso_jax.minimise",
+    "AbstractSolver": "sedsabso_jax.AbstractSolver",
+    "SEDSABSO": "sedsabso_jax.SEDSABSO",
+    "BSO": "sedsabso_jax.BSO",
+    "LDWPSO": "sedsabso_jax.LDWPSO",
+    "Evosax": "sedsabso_jax.Evosax",
+    "BlackBox": "sedsabso_jax.BlackBox",
+    "L1Residual": "sedsabso_jax.L1Residual",
+    "Result": "sedsabso_jax.Result",
+    "box_around": "sedsabso_jax.box_around",
+    "iterations_for_budget": "sedsabso_jax.iterations_for_budget",
+    "evaluation_counts": "sedsabso_jax.evaluation_counts",
+    "baselines": "sedsabso_jax.baselines",
+})

@@ -1,0 +1,204 @@
+"""``sedsabso-jax identify``: the flags become a robot, data and estimator objects, then
+one library call (:func:`~sedsabso_jax.identification._auto.select_and_identify`) whose
+report is printed and written."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+
+from ._common import (
+    BUILTIN_ROBOTS,
+    Progress,
+    check_writable,
+    non_negative_int,
+    positive_float,
+    positive_int,
+)
+
+#: ``--method``, ``--weights`` and ``--friction`` left to cross-validation.
+AUTO = "auto"
+WEIGHTS = (AUTO, "residual", "limits", "equal")
+
+
+def _numbers(flag: str, text, n: int):
+    """A comma-separated list of ``n`` numbers given with ``flag``."""
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise ValueError(f"{flag}: expected {n} comma-separated numbers, got {text!r}") from None
+    if len(values) != n:
+        raise ValueError(f"{flag}: expected {n} numbers (one per joint), got {len(values)}")
+    return values
+
+
+def _transmission(args, n: int):
+    """The motors' transmission from --gear-ratios, --coupling, --position-offsets and
+    --drive-gains, or None."""
+    from ..measurements._transmission import Transmission
+
+    ratios = _numbers("--gear-ratios", args.gear_ratios, n)
+    if ratios is None:
+        for flag, value in (("--motor-side", args.motor_side), ("--coupling", args.coupling),
+                            ("--position-offsets", args.position_offsets),
+                            ("--drive-gains", args.drive_gains)):
+            if value:
+                raise ValueError(f"{flag} needs --gear-ratios (one per joint, motor turns per "
+                                 f"joint turn)")
+        return None
+    coupling = {}
+    for spec in args.coupling or []:
+        try:
+            pair, ratio = spec.split("=")
+            motor, joint = (int(v) for v in pair.split(":"))
+            coupling[(motor, joint)] = float(ratio)
+        except ValueError:
+            raise ValueError(f"--coupling: expected MOTOR:JOINT=RATIO (numbered from 1), e.g. "
+                             f"6:5=32, got {spec!r}") from None
+    return Transmission.from_gear_ratios(
+        ratios, coupling=coupling, offset=_numbers("--position-offsets",
+                                                   args.position_offsets, n),
+        drive_gains=_numbers("--drive-gains", args.drive_gains, n))
+
+
+def _prior_strength(text: str):
+    """``--prior-strength``: a number >= 0, or ``cv``."""
+    if text.strip().lower() == "cv":
+        return "cv"
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected a number >= 0 or 'cv', got {text!r}")
+    return value
+
+
+def run(args) -> None:
+    """The subcommand: check the flags, load, build the objects, one call, print, write."""
+    from ..dynamics import _robots as robots
+    from ..dynamics._limits import joint_limits
+    from ..identification._auto import estimator_candidates, select_and_identify
+    from ..identification._validation import FRICTION_CANDIDATES
+    from ..measurements._load import load_measurements
+
+    check_writable(args.out, args.json, args.urdf_out)
+    if args.prior_strength != 0.0 and not args.physical:
+        raise ValueError("--prior-strength needs --physical: the pull to the a-priori "
+                         "parameters is part of the physically consistent fit")
+    if args.prior_strength == "cv" and args.folds == 0:
+        raise ValueError("--prior-strength cv chooses by cross-validation, which --folds 0 "
+                         "turns off: give a number")
+    if args.urdf_out is not None and not args.physical:
+        raise ValueError("--urdf-out needs --physical: a simulator's URDF needs physically "
+                         "consistent link parameters")
+    robot = robots.load(args.robot, args.tip)
+    load = dict(n_joints=robot.n_joints, cutoff_hz=args.cutoff_hz,
+                filter_torques=args.filter_torques, downsample=args.downsample,
+                resample_hz=args.resample_hz, trim_edges=not args.keep_edges)
+    transmission = _transmission(args, robot.n_joints)
+    data = load_measurements(args.data, **load)
+    held_out = load_measurements(args.validate, **load) if args.validate else None
+    if args.motor_side:
+        data = transmission.to_joint_side(data)
+        held_out = None if held_out is None else transmission.to_joint_side(held_out)
+    limits = joint_limits(args.robot, robot).torque_limits
+    if args.weights == "limits" and limits is None:
+        raise ValueError(f"--weights limits: no torque limits known for --robot {args.robot} "
+                         f"(a URDF's <limit effort=...>)")
+    estimators = estimator_candidates(None if args.method == AUTO else args.method,
+                                      args.weights, runs=args.runs,
+                                      iterations=args.iterations, seed=args.seed)
+    frictions = FRICTION_CANDIDATES if args.friction == AUTO else (args.friction,)
+    if args.folds == 0 and len(frictions) * len(estimators) > 1:
+        raise ValueError("--folds 0 turns cross-validation off, so nothing can be chosen by "
+                         "it: give --method, --weights and --friction")
+    report = select_and_identify(robot, data, held_out=held_out, limits=limits,
+                                 transmission=transmission, estimators=estimators,
+                                 frictions=frictions, folds=args.folds,
+                                 physical=args.physical, prior_strength=args.prior_strength,
+                                 progress=Progress())
+    settings = {"robot": args.robot, "data": os.path.abspath(args.data),
+                "validate": None if args.validate is None else os.path.abspath(args.validate),
+                "torque_limits": limits, "loading": {**load, "data_info": data.info},
+                "motor_side": bool(args.motor_side)}
+    written = report.write(settings, args.out, args.json, args.urdf_out)
+    print(report.text())
+    if written:
+        print("written: " + ", ".join(written))
+
+
+def add_parser(sub, parents) -> None:
+    """The ``identify`` subcommand's flags."""
+    from ..identification._fitting import Estimator
+    from ..identification._model import FRICTION_TERMS
+    from ..identification._validation import PRIOR_STRENGTHS
+
+    ip = sub.add_parser(
+        "identify", parents=parents,
+        help="identify a robot's base parameters from measured data",
+        description="Identify base parameters from joint data (.npz with keys positions, "
+        "velocities, accelerations, torques, times; or .csv with a header time,q1..,qd1..,"
+        "qdd1..,tau1..) and validate on held-out data.")
+    ip.add_argument("--robot", required=True,
+                    help=f"one of {', '.join(BUILTIN_ROBOTS)} or a .urdf file")
+    ip.add_argument("--tip", default=None, help="URDF tip link, for trees that branch")
+    ip.add_argument("--data", required=True, help="identification data (.npz or .csv)")
+    ip.add_argument("--validate", default=None, help="held-out data (.npz or .csv)")
+    ip.add_argument("--method", choices=(AUTO, *Estimator.registered()), default=AUTO,
+                    help="estimator; auto (default): OLS or WLS, chosen by cross-validation")
+    ip.add_argument("--friction", default=AUTO,
+                    help=f"torque model: terms of {', '.join(FRICTION_TERMS)} joined by +; "
+                    "auto (default): chosen by cross-validation among viscous-coulomb, "
+                    "+offset, +offset+armature, +offset+quadratic+smooth")
+    ip.add_argument("--weights", choices=WEIGHTS, default=AUTO,
+                    help="row weights per joint: residual (Gautier's two-step WLS), limits "
+                    "(1 / torque limit), equal; auto (default): chosen by cross-validation")
+    ip.add_argument("--folds", type=non_negative_int, default=5,
+                    help="cross-validation folds over the motion's phase (5); they choose "
+                    "what is auto and report the error on motion not fitted; 0: off")
+    ip.add_argument("--motor-side", action="store_true",
+                    help="--data and --validate hold motor angles and motor torques (or "
+                    "currents, with --drive-gains): converted with --gear-ratios")
+    ip.add_argument("--gear-ratios", default=None,
+                    help="motor turns per joint turn, one per joint, comma-separated")
+    ip.add_argument("--coupling", action="append", default=None, metavar="M:J=RATIO",
+                    help="motor M also turns with joint J at RATIO (repeatable), e.g. 6:5=32")
+    ip.add_argument("--position-offsets", default=None,
+                    help="joint position of each encoder zero [rad], comma-separated")
+    ip.add_argument("--drive-gains", default=None,
+                    help="motor torque per unit of recorded current, one per motor")
+    ip.add_argument("--physical", action="store_true",
+                    help="physically consistent parameters (OLS/WLS): positive-definite "
+                    "pseudo-inertia per link, friction >= 0")
+    ip.add_argument("--prior-strength", type=_prior_strength, default=0.0, metavar="S|cv",
+                    help="with --physical: pull toward the robot's a-priori parameters, in "
+                    "multiples of the data term's mean curvature (0), or 'cv' to choose it "
+                    "by cross-validation from " + ", ".join(f"{v:g}" for v in PRIOR_STRENGTHS))
+    ip.add_argument("--runs", type=positive_int, default=1,
+                    help="swarm runs, the best kept (1)")
+    ip.add_argument("--iterations", type=positive_int, default=600,
+                    help="swarm iterations (600)")
+    ip.add_argument("--seed", type=non_negative_int, default=0, help="random seed (0)")
+    ip.add_argument("--cutoff-hz", type=positive_float, default=None,
+                    help="low-pass cutoff where velocities/accelerations are derived or "
+                    "torques filtered (default 10 Hz)")
+    ip.add_argument("--filter-torques", action="store_true", help="low-pass the torques")
+    ip.add_argument("--downsample", type=positive_int, default=1,
+                    help="keep every k-th sample after filtering (1)")
+    ip.add_argument("--resample-hz", type=positive_float, default=None,
+                    help="interpolate onto a uniform grid at this rate first (irregular logs)")
+    ip.add_argument("--keep-edges", action="store_true",
+                    help="keep the first and last 2 / cutoff seconds, where derived signals "
+                    "show the filter's edge transients (dropped by default)")
+    ip.add_argument("--json", default=None,
+                    help="write the results JSON to this path (its directory is created)")
+    ip.add_argument("--out", default=None,
+                    help="directory for torque plots and identification.json (created)")
+    ip.add_argument("--urdf-out", default=None,
+                    help="write the robot's URDF with the identified link parameters and "
+                    "joint friction (needs --physical)")
+    ip.set_defaults(func=run)

@@ -1,0 +1,245 @@
+"""URDF -> :class:`Robot`, parsed with pytorch-kinematics' URDF parser.
+
+Transforms are composed here in float64 from the parsed ``xyz``/``rpy`` (pytorch-kinematics
+builds its own in float32). Fixed joints are merged into their parent link; every link off
+the base-to-tip path hangs rigidly on the path (a movable joint there is locked at 0, with
+a warning). URDF inertials (mass, CoM and inertia about the CoM, in the ``<inertial>``
+frame) are converted to the project's convention: inertia about the link-frame origin, in
+the link frame, and first moments ``m * c``. ``<dynamics friction damping>`` become the
+joint's Coulomb and viscous friction.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import warnings
+from collections import defaultdict
+
+import numpy as np
+from lxml import etree
+
+from . import _spatial as sp
+from ._inertia import params_from_com, transform_params
+from ._robot import STANDARD_GRAVITY, Robot
+
+_MOVABLE = {"revolute": "revolute", "continuous": "revolute", "prismatic": "prismatic"}
+
+
+class URDFError(ValueError):
+    """A URDF that cannot be turned into a serial chain."""
+
+
+def _read(path) -> str:
+    path = os.fspath(path)
+    try:
+        with open(path, "rb") as fh:
+            raw = fh.read()
+    except OSError as err:
+        raise URDFError(f"cannot read URDF {path!r}: {err.strerror or err}") from None
+    if not raw.strip():
+        raise URDFError(f"URDF {path!r} is empty")
+    if re.search(rb"<!(DOCTYPE|ENTITY)", raw):
+        raise URDFError(f"URDF {path!r} declares a DOCTYPE; DTDs and entities are refused")
+    # Parse once with a parser that resolves no entity and loads nothing, to refuse
+    # DTDs (entity expansion, external files) and to report syntax errors with a line.
+    parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False,
+                             huge_tree=False)
+    try:
+        root = etree.fromstring(raw, parser)
+    except etree.XMLSyntaxError as err:
+        raise URDFError(f"URDF {path!r} is not well-formed XML: {err}") from None
+    doc = root.getroottree().docinfo
+    if doc.internalDTD is not None or doc.doctype:
+        raise URDFError(f"URDF {path!r} declares a DOCTYPE; DTDs and entities are refused")
+    if root.tag != "robot":
+        raise URDFError(f"URDF {path!r}: root element is <{root.tag}>, expected <robot>")
+    return etree.tostring(root, encoding="unicode")
+
+
+def _parse(text: str, path: str):
+    from pytorch_kinematics.urdf_parser_py import urdf as pk_urdf
+    from pytorch_kinematics.urdf_parser_py.xml_reflection import core
+
+    messages: list[str] = []
+    previous = core.on_error
+    core.on_error = messages.append  # the parser prints to stderr otherwise
+    try:
+        model = pk_urdf.URDF.from_xml_string(text)
+    except Exception as err:  # the parser raises bare AssertionError, KeyError, ...
+        raise URDFError(f"URDF {path!r} could not be parsed: {type(err).__name__}: {err}") from None
+    finally:
+        core.on_error = previous
+    serious = [m for m in messages if not m.startswith("Unknown tag")]
+    if serious:
+        warnings.warn(f"URDF {path!r}: " + "; ".join(serious), stacklevel=4)
+    return model
+
+
+def _origin(element) -> np.ndarray:
+    o = getattr(element, "origin", None)
+    if o is None:
+        return np.eye(4)
+    xyz = np.zeros(3) if o.xyz is None else np.asarray(o.xyz, float)
+    rpy = np.zeros(3) if o.rpy is None else np.asarray(o.rpy, float)
+    return sp.transform(sp.rpy_matrix(rpy), xyz)
+
+
+def _inertial_params(link) -> np.ndarray:
+    """10 inertial parameters of a URDF link about its frame origin, in its frame."""
+    inertial = link.inertial
+    if inertial is None:
+        return np.zeros(10)
+    mass = float(inertial.mass or 0.0)
+    I = np.zeros((3, 3)) if inertial.inertia is None else np.asarray(inertial.inertia.to_matrix())
+    T = _origin(inertial)  # inertial frame in the link frame
+    return transform_params(T, params_from_com(mass, np.zeros(3), I))
+
+
+def from_urdf(path, tip: str | None = None, *, gravity=STANDARD_GRAVITY) -> Robot:
+    """Serial chain from a URDF file, from its root link to ``tip`` (a link name).
+
+    ``tip`` may be left out when the tree has one path of movable joints; a tree that
+    branches into several needs it. Joint and link names are the URDF's.
+    """
+    path = os.fspath(path)
+    model = _parse(_read(path), path)
+    links = {link.name: link for link in model.links}
+    children = defaultdict(list)
+    parent_joint = {}
+    for j in model.joints:
+        for end in (j.parent, j.child):
+            if end not in links:
+                raise URDFError(f"URDF {path!r}: joint {j.name!r} refers to missing link {end!r}")
+        if j.child in parent_joint:
+            raise URDFError(f"URDF {path!r}: link {j.child!r} has two parent joints")
+        children[j.parent].append(j)
+        parent_joint[j.child] = j
+    roots = [name for name in links if name not in parent_joint]
+    if len(roots) != 1:
+        raise URDFError(f"URDF {path!r}: expected one root link, found {roots or 'none (a loop)'}")
+    root = roots[0]
+
+    def moves(j) -> bool:  # any non-fixed joint, supported or not (checked below)
+        return j.type != "fixed" or any(moves(c) for c in children[j.child])
+
+    if tip is None:
+        path_joints, link = [], root
+        while True:
+            onward = [j for j in children[link] if moves(j)]
+            if not onward:
+                break
+            if len(onward) > 1:
+                leaves = sorted(_leaves(children, link))
+                raise URDFError(
+                    f"URDF {path!r} branches at link {link!r} into joints "
+                    f"{[j.name for j in onward]}; choose the tip link (--tip on the command "
+                    f"line, tip= in Python), one of {leaves}"
+                )
+            path_joints.append(onward[0])
+            link = onward[0].child
+    else:
+        if tip not in links:
+            raise URDFError(f"URDF {path!r} has no link {tip!r} (tip); links: {sorted(links)}")
+        path_joints, link = [], tip
+        while link in parent_joint:
+            path_joints.append(parent_joint[link])
+            link = parent_joint[link].parent
+        path_joints.reverse()
+    for j in path_joints:
+        if j.type not in _MOVABLE and j.type != "fixed":
+            raise URDFError(
+                f"URDF {path!r}: joint {j.name!r} has type {j.type!r}; supported: revolute, "
+                "continuous, prismatic, fixed"
+            )
+        if getattr(j, "mimic", None) is not None and j.type in _MOVABLE:
+            raise URDFError(f"URDF {path!r}: joint {j.name!r} is a mimic joint (not supported)")
+    on_path = {j.name for j in path_joints}
+    locked = []
+
+    def rigid_subtree(link_name) -> np.ndarray:
+        """Parameters of a link plus everything hanging off it off-path, in its frame."""
+        total = _inertial_params(links[link_name])
+        for j in children[link_name]:
+            if j.name in on_path:
+                continue
+            if j.type != "fixed":
+                locked.append(j.name)
+            total = total + transform_params(_origin(j), rigid_subtree(j.child))
+        return total
+
+    T_fixed, screws, types, params, jnames, lnames = [], [], [], [], [], []
+    T_acc = np.eye(4)  # fixed transforms since the last movable joint
+    body_params = None  # parameters of the current movable link (None before the first)
+    for j in path_joints:
+        T_acc = T_acc @ _origin(j)
+        if j.type == "fixed":
+            if body_params is not None:  # a fixed child on the path merges into the body
+                body_params[:10] += transform_params(T_acc, rigid_subtree(j.child))
+            continue
+        if body_params is not None:
+            params.append(body_params)
+        axis = np.asarray(j.axis if j.axis is not None else (1.0, 0.0, 0.0), float)
+        norm = np.linalg.norm(axis)
+        if not np.isfinite(norm) or norm < 1e-12:
+            raise URDFError(f"URDF {path!r}: joint {j.name!r} has a zero axis {axis.tolist()}")
+        axis = axis / norm
+        kind = _MOVABLE[j.type]
+        T_fixed.append(T_acc)
+        screws.append(np.r_[axis, 0, 0, 0] if kind == "revolute" else np.r_[0, 0, 0, axis])
+        types.append(kind)
+        jnames.append(j.name)
+        lnames.append(j.child)
+        dyn = getattr(j, "dynamics", None)
+        friction = [float(getattr(dyn, "friction", 0.0) or 0.0),
+                    float(getattr(dyn, "damping", 0.0) or 0.0)]
+        body_params = np.r_[rigid_subtree(j.child), 0.0, 0.0]
+        body_params[10:] = friction
+        T_acc = np.eye(4)
+    if body_params is None:
+        raise URDFError(f"URDF {path!r} has no movable joint between {root!r} and the tip")
+    params.append(body_params)
+    if locked:
+        warnings.warn(
+            f"URDF {path!r}: joints {sorted(locked)} are off the chain {root!r} -> "
+            f"{lnames[-1]!r}; they are locked at 0 and their links carried rigidly",
+            stacklevel=2,
+        )
+    name = getattr(model, "name", None) or os.path.splitext(os.path.basename(path))[0]
+    return Robot(T_fixed, screws, types, np.concatenate(params), gravity,
+                 joint_names=jnames, link_names=lnames, name=name)
+
+
+def _leaves(children, link_name):
+    if not children[link_name]:
+        return [link_name]
+    return [leaf for j in children[link_name] for leaf in _leaves(children, j.child)]
+
+
+def joint_limit_rows(path, joint_names) -> np.ndarray:
+    """``<limit>`` of the named joints as rows ``(lower, upper, velocity, effort)``.
+
+    A joint without ``<limit>`` (or a continuous joint, whose position limits URDF
+    ignores) has ``lower = -inf, upper = +inf``; a missing or zero velocity is ``+inf``
+    (unknown) and a missing or zero effort ``nan``.
+    """
+    path = os.fspath(path)
+    model = _parse(_read(path), path)
+    joints = {j.name: j for j in model.joints}
+    rows = []
+    for name in joint_names:
+        if name not in joints:
+            raise URDFError(f"URDF {path!r} has no joint {name!r}; joints: {sorted(joints)}")
+        j, lim = joints[name], joints[name].limit
+        lower = upper = velocity = effort = None
+        if lim is not None:
+            lower, upper, velocity, effort = lim.lower, lim.upper, lim.velocity, lim.effort
+        if lim is None or j.type == "continuous":
+            lower = upper = None
+        rows.append((
+            -np.inf if lower is None else float(lower),
+            np.inf if upper is None else float(upper),
+            float(velocity) if velocity else np.inf,
+            float(effort) if effort else np.nan,
+        ))
+    return np.array(rows, dtype=float).reshape(len(rows), 4)

@@ -1,0 +1,153 @@
+"""The command's default as one call: choose the torque model and the estimator by
+cross-validation, then (physically consistent fits) the pull to the prior, then fit, and
+judge the fit on held-out data::
+
+    report = select_and_identify(robot, data, held_out=other_run, limits=limits)
+    print(report.text())          # what `sedsabso-jax identify` prints
+    report.write(settings, out_dir, json_path)
+
+``sedsabso-jax identify`` is this function with its flags turned into arguments
+(:func:`estimator_candidates` for ``--method`` and ``--weights``)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..dynamics._base_parameters import base_parameters
+from ..measurements._container import Measurements
+from ._estimators import OLS, BoxSearch, PhysicallyConsistent
+from ._fitting import Estimator
+from ._identify import identify, torque_model
+from ._model import TorqueModel
+from ._report import IdentificationReport
+from ._validation import (
+    DEFAULT_FOLDS,
+    ESTIMATOR_CANDIDATES,
+    FRICTION_CANDIDATES,
+    PRIOR_STRENGTHS,
+    choose_prior_strength,
+    cross_validate,
+    select_model,
+)
+
+#: The weightings a fixed estimator is tried with (None: equal), simplest first.
+SIGMA_CANDIDATES = (None, "residual", "limits")
+#: ``sigma`` of :func:`estimator_candidates` that leaves the weighting to cross-validation.
+AUTO = "auto"
+
+
+def estimator_candidates(method: str | None = None, sigma=AUTO, **options
+                         ) -> tuple[Estimator, ...]:
+    """The estimators the default chooses among.
+
+    - ``method`` None: :data:`~._validation.ESTIMATOR_CANDIDATES` (OLS, Gautier's WLS,
+      WLS by the limits), or those of them with weighting ``sigma``;
+    - a registered name (``"L1"``, ``"SEDSABSO"``, ...) with ``sigma`` :data:`AUTO`: that
+      estimator with each weighting of :data:`SIGMA_CANDIDATES` (WLS without None, which
+      is its residual weighting), except a box search: every run of one is costly, so no
+      weighting search (equal weights);
+    - a name and a ``sigma``: that estimator alone.
+
+    ``sigma``: :data:`AUTO`, None or ``"equal"``, ``"residual"``, ``"limits"``;
+    ``options``: the named estimator's options (``runs``, ``iterations``, ``seed``, ...;
+    those it does not have are ignored)."""
+    if sigma == "equal":
+        sigma = None
+    if sigma != AUTO and sigma not in SIGMA_CANDIDATES:
+        raise ValueError(f"sigma must be {AUTO!r}, 'equal' (None), 'residual' or 'limits', "
+                         f"got {sigma!r}")
+    if method is None:
+        return tuple(e for e in ESTIMATOR_CANDIDATES if sigma == AUTO or e.sigma == sigma)
+    if sigma != AUTO:
+        return (Estimator.named(method, sigma=sigma, **options),)
+    first = Estimator.named(method, **options)
+    if isinstance(first, BoxSearch):
+        return (first,)
+    return tuple(Estimator.named(method, sigma=s, **options) for s in SIGMA_CANDIDATES
+                 if s is not None or first.default_weighting == "equal")
+
+
+def select_and_identify(robot, data, *, held_out=None, limits=None, transmission=None,
+                        estimators=None, frictions=None, folds=DEFAULT_FOLDS,
+                        physical: bool = False, prior_strength=0.0, base=None,
+                        progress=None) -> IdentificationReport:
+    """Identify ``robot`` from ``data`` as ``sedsabso-jax identify`` does by default.
+
+    1. Model choice: every estimator of ``estimators`` (default
+       :data:`~._validation.ESTIMATOR_CANDIDATES`; one :class:`~._fitting.Estimator` or a
+       sequence, e.g. :func:`estimator_candidates`) with every torque model of
+       ``frictions`` (default :data:`~._validation.FRICTION_CANDIDATES`) is
+       cross-validated over ``folds`` folds of the motion's phase, and the simplest
+       within one standard error of the lowest error is kept
+       (:func:`~._validation.select_model`). With one candidate, it is only
+       cross-validated (``folds=0``: not at all).
+    2. ``physical``: every candidate is fitted physically consistent
+       (:class:`~._estimators.PhysicallyConsistent`); ``prior_strength``, a number or
+       ``"cv"`` (chosen from :data:`~._validation.PRIOR_STRENGTHS` by
+       :func:`~._validation.choose_prior_strength`), pulls it toward the robot's
+       a-priori parameters.
+    3. The fit on all of ``data``, judged on it, on its cross-validation and on
+       ``held_out`` (never used to choose or fit).
+
+    ``data`` and ``held_out``: :class:`~sedsabso_jax.Measurements` or ``(times, q, qd,
+    qdd, tau)``; ``folds``: a count, or fold labels (one integer per sample); ``limits``:
+    per-joint torque limits (the NRMS measure and the 1/limit weighting; candidates
+    weighting by them are skipped without); ``transmission``, ``base``: as in
+    :func:`~._identify.identify`; ``progress(label, done, total)`` after each candidate's
+    cross-validation. Returns the :class:`~._report.IdentificationReport` the command
+    prints (``text()``) and writes (``write(...)``)."""
+    data = data if isinstance(data, Measurements) else Measurements(*data)
+    if held_out is not None and not isinstance(held_out, Measurements):
+        held_out = Measurements(*held_out)
+    estimators = ESTIMATOR_CANDIDATES if estimators is None else (
+        (estimators,) if isinstance(estimators, Estimator) else tuple(estimators))
+    frictions = FRICTION_CANDIDATES if frictions is None else (
+        (frictions,) if isinstance(frictions, str) else tuple(frictions))
+    if prior_strength != 0.0 and not physical:
+        raise ValueError("prior_strength needs physical=True: the pull to the a-priori "
+                         "parameters is part of the physically consistent fit")
+    off = np.ndim(folds) == 0 and not folds  # folds: a count, or fold labels
+    if prior_strength == "cv" and off:
+        raise ValueError("prior_strength='cv' chooses by cross-validation, which folds=0 "
+                         "turns off: give a number")
+    if physical:
+        for e in estimators:
+            if not isinstance(e, (OLS, PhysicallyConsistent)):
+                raise ValueError(f"physical=True is a least-squares fit: use method 'OLS' or "
+                                 f"'WLS', not {e.name!r}")
+        estimators = tuple(e if isinstance(e, PhysicallyConsistent)
+                           else PhysicallyConsistent(e) for e in estimators)
+    choose = len(frictions) * len(estimators) > 1
+    if off and choose:
+        raise ValueError("folds=0 turns cross-validation off, so nothing can be chosen by it: "
+                         "give one estimator and one friction model")
+    base = base_parameters(robot) if base is None else base
+    common = dict(limits=limits, transmission=transmission, base=base)
+    selection = cv = None
+    if choose:
+        selection = select_model(robot, data, estimators=estimators, frictions=frictions,
+                                 folds=folds, progress=progress, **common)
+        estimator, model = selection.estimator, selection.model
+        cv = selection.cross_validation
+    else:
+        estimator, model = estimators[0], frictions[0]
+        if not isinstance(model, TorqueModel):
+            model = torque_model(robot, model, transmission=transmission, base=base)
+        if not off:
+            cv = cross_validate(robot, data, estimator, model, folds=folds, limits=limits)
+    prior_selection = None
+    if physical and prior_strength == "cv":
+        prior_selection = choose_prior_strength(robot, data, estimator, model,
+                                                strengths=PRIOR_STRENGTHS, folds=folds,
+                                                limits=limits)
+        estimator, cv = prior_selection.estimator, prior_selection.cross_validation
+    elif physical:
+        estimator = dataclasses.replace(estimator,  # type: ignore[type-var]
+                                        prior_strength=float(prior_strength))
+        if prior_strength and not off:
+            cv = cross_validate(robot, data, estimator, model, folds=folds, limits=limits)
+    ident = identify(robot, data, estimator, model, limits=limits)
+    return IdentificationReport.evaluate(ident, data, held_out, limits, cross_validation=cv,
+                                         selection=selection, prior_selection=prior_selection)

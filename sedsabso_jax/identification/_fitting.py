@@ -1,0 +1,252 @@
+"""What every identification estimator shares: the rows it fits (:class:`FitProblem`), what
+it returns (:class:`EstimatorFit`), the one row weighting (:func:`weigh`), and the
+:class:`Estimator` interface with its registry of names.
+
+An estimator is an immutable object carrying only its own options, checked when it is
+built, with one :meth:`~Estimator.fit` method (:mod:`._estimators` has them all). A class
+that sets ``registered_as = ("NAME",)`` is known by that name to the command line's
+``--method`` and to :meth:`Estimator.named`: writing the class is all it takes to add
+one.
+"""
+
+from __future__ import annotations
+
+import abc
+import dataclasses
+from typing import Any, ClassVar
+
+import numpy as np
+
+from .._deprecation import caller_stacklevel
+from ..optim._linear import Factorization, factorize
+from ._model import TorqueModel
+
+#: How rows are weighted: each joint's rows divided by its standard deviation sigma.
+WEIGHTINGS = ("equal", "residual", "limits", "given")
+_NAMED: dict[str, type[Estimator]] = {}
+
+
+def per_joint(name: str, value, n: int, allow_none: bool = True) -> np.ndarray | None:
+    """``value`` as ``n`` positive finite numbers (one per joint), or None if allowed."""
+    if value is None and allow_none:
+        return None
+    v = np.asarray(value, dtype=float)
+    if v.shape != (n,) or not np.all(np.isfinite(v)) or np.any(v <= 0):
+        raise ValueError(f"{name} must be {n} positive finite numbers (one per joint), got "
+                         f"{value!r}")
+    return v
+
+
+def check_sigma(sigma):
+    """``sigma`` as an estimator keeps it: None, ``"residual"``, ``"limits"`` or a tuple of
+    positive finite numbers (one per joint; their count is checked against the data)."""
+    if sigma is None or (isinstance(sigma, str) and sigma in ("residual", "limits")):
+        return sigma
+    expected = "sigma must be None, 'residual', 'limits' or positive finite numbers (one per "
+    try:
+        v = None if isinstance(sigma, str) else np.asarray(sigma, dtype=float)
+    except (TypeError, ValueError):
+        v = None
+    if v is None or v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)) or np.any(v <= 0):
+        raise ValueError(f"{expected}joint), got {sigma!r}")
+    return tuple(float(x) for x in v)
+
+
+def weighting(sigma, default: str = "equal") -> str:
+    """The kind of weighting ``sigma`` stands for (one of :data:`WEIGHTINGS`); None is
+    ``default``."""
+    if sigma is None:
+        return default
+    return sigma if isinstance(sigma, str) else "given"
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class FitProblem:
+    """The rows an estimator fits, checked: the torque ``model``, its regressor
+    ``Y (T, n, d)`` and the torques ``tau (T, n)`` (all samples, or a cross-validation's
+    training folds), the per-joint torque ``limits`` (or None), and ``warn``: report a
+    rank-deficient or ill-conditioned regressor (a ``UserWarning``)."""
+
+    model: TorqueModel
+    Y: np.ndarray
+    tau: np.ndarray
+    limits: np.ndarray | None = None
+    warn: bool = True
+
+    def __post_init__(self):
+        if not isinstance(self.model, TorqueModel):
+            raise TypeError(f"model must be a TorqueModel, got {type(self.model).__name__}")
+        n, d = self.model.robot.n_joints, self.model.dim
+        Y, tau = np.asarray(self.Y, dtype=float), np.asarray(self.tau, dtype=float)
+        if Y.ndim != 3 or Y.shape[1:] != (n, d):
+            raise ValueError(f"Y must have shape (samples, {n}, {d}) (the torque model's "
+                             f"regressor), got {Y.shape}")
+        if tau.shape != (Y.shape[0], n):
+            raise ValueError(f"tau must have shape ({Y.shape[0]}, {n}) (one row per sample of "
+                             f"Y), got {tau.shape}")
+        if Y.shape[0] == 0:
+            raise ValueError("no samples")
+        if not (np.all(np.isfinite(tau)) and np.isfinite(np.sum(Y))):
+            raise ValueError("Y or tau contains NaN or Inf")
+        object.__setattr__(self, "Y", Y)
+        object.__setattr__(self, "tau", tau)
+        object.__setattr__(self, "limits", per_joint("limits", self.limits, n))
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class EstimatorFit:
+    """What :meth:`Estimator.fit` returns: the model's values ``x`` (and the full
+    parameters ``full`` of a physical fit), the ``sigma`` used, the factorisation of the
+    unweighted rows ``factor0`` (None when neither the diagnostics nor the fit needed it),
+    the weighted rows ``W x ~ b``, the solver's :class:`~sedsabso_jax.Result` (box
+    searches, LM) and ``extra`` settings for the report."""
+
+    x: np.ndarray
+    full: np.ndarray | None
+    sigma: np.ndarray
+    factor0: Factorization | None
+    W: np.ndarray
+    b: np.ndarray
+    result: Any
+    extra: dict
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class WeightedRows:
+    """What :func:`weigh` returns: ``sigma``, the rows ``W x ~ b`` divided by it, the
+    unweighted factorisation ``factor0`` and the weighted one ``factor`` (when asked)."""
+
+    sigma: np.ndarray
+    W: np.ndarray
+    b: np.ndarray
+    factor0: Factorization | None
+    factor: Factorization | None
+
+    @property
+    def weighted_factor(self) -> Factorization:
+        """The weighted rows' factorisation (``weigh(..., factor=True)``)."""
+        if self.factor is None:
+            raise ValueError("weigh(..., factor=True) factorises the weighted rows")
+        return self.factor
+
+
+def weigh(problem: FitProblem, sigma, *, default: str = "equal",
+          factor: bool = False) -> WeightedRows:
+    """The row weighting every estimator uses: each joint's rows divided by its sigma.
+
+    ``sigma`` (see :func:`check_sigma`): None (``default``: equal, or ``"residual"`` for
+    WLS), ``"residual"`` (Gautier's two-step estimate: the RMS of each joint's OLS
+    residual, corrected for the parameters acting on that joint), ``"limits"`` (the
+    problem's torque limits: the L2 objective is then the squared NRMS over the limits),
+    or ``n`` numbers. ``factor``: also factorise the weighted rows (least squares)."""
+    Y, tau, n = problem.Y, problem.tau, problem.model.robot.n_joints
+    T, d = Y.shape[0], Y.shape[-1]
+    kind = weighting(sigma, default)
+    if kind == "limits" and problem.limits is None:
+        raise ValueError("sigma='limits' needs limits=(one torque limit per joint)")
+    given = per_joint("sigma", sigma, n, allow_none=False) if kind == "given" else None
+    W0, tau0 = Y.reshape(-1, d), tau.reshape(-1)
+    # the unweighted factor: the diagnostics, the OLS fit and Gautier's first pass
+    factor0 = factorize(W0, tau0) if problem.warn or kind in ("equal", "residual") else None
+    if factor0 is not None and problem.warn:
+        factor0.warn("identify: the stacked regressor", problem.model.names,
+                     stacklevel=caller_stacklevel())
+    if kind == "equal":
+        return WeightedRows(np.ones(n), W0, tau0, factor0, factor0)
+    s: np.ndarray | None
+    if kind == "limits":
+        s = problem.limits
+    elif kind == "given":
+        s = given
+    else:  # Gautier: sigma_j^2 = ||r_j||^2 / (T - d_j), d_j = parameters acting on joint j
+        assert factor0 is not None  # computed above for "residual"
+        r = Y @ factor0.solve() - tau
+        d_j = np.count_nonzero(np.any(Y != 0, axis=0), axis=-1)
+        s = np.sqrt(np.sum(r ** 2, axis=0) / np.maximum(T - d_j, 1))
+        s = np.where(s > 0, s, max(s.max(), 1e-12))
+    assert s is not None
+    row = np.tile(1.0 / s, T)
+    W, b = W0 * row[:, None], tau0 * row
+    return WeightedRows(np.asarray(s), W, b, factor0, factorize(W, b) if factor else None)
+
+
+class Estimator(abc.ABC):
+    """An identification estimator: immutable, its options checked when it is built (a
+    bad one is a ``ValueError`` naming it), and :meth:`fit` to fit a :class:`FitProblem`.
+
+    Subclasses are frozen dataclasses with a ``sigma`` option (the row weighting,
+    :func:`weigh`), a :attr:`name` (what reports call the method) and, to be known by
+    name to ``--method`` and :meth:`named`, ``registered_as = ("NAME", ...)``."""
+
+    #: The names this class is known by (:meth:`named`, the command's ``--method``).
+    registered_as: ClassVar[tuple[str, ...]] = ()
+    #: What ``sigma=None`` means for this estimator (see :func:`weigh`).
+    default_weighting: ClassVar[str] = "equal"
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        for name in cls.__dict__.get("registered_as", ()):
+            _NAMED[name] = cls
+
+    @property
+    @abc.abstractmethod
+    def name(self) -> str:
+        """What reports call the method: ``"OLS"``, ``"WLS"``, ``"L1"``, ``"LM"``, a
+        solver's name."""
+
+    @abc.abstractmethod
+    def fit(self, problem: FitProblem) -> EstimatorFit:
+        """Fit the rows of ``problem``."""
+
+    @property
+    def physical(self) -> bool:
+        """Whether the fit is physically consistent (full link parameters)."""
+        return False
+
+    @property
+    def weights(self) -> str:
+        """The kind of row weighting (one of :data:`WEIGHTINGS`)."""
+        return weighting(getattr(self, "sigma", None), self.default_weighting)
+
+    def settings(self) -> dict:
+        """The settings the JSON report writes for this estimator (``method``,
+        ``physical``, ``weights`` and the estimator's own)."""
+        return {"method": self.name, "physical": self.physical, "weights": self.weights}
+
+    def check(self, model: TorqueModel, limits) -> None:
+        """What can be checked before any data: the options against ``model`` and the
+        torque ``limits`` (None if unknown)."""
+        sigma = getattr(self, "sigma", None)
+        if sigma == "limits" and limits is None:
+            raise ValueError("sigma='limits' needs limits=(one torque limit per joint)")
+        if self.weights == "given":
+            per_joint("sigma", sigma, model.robot.n_joints, allow_none=False)
+
+    @classmethod
+    def from_name(cls, name: str, **options) -> Estimator:
+        """The estimator this class registers as ``name``, built with those ``options``
+        it has (the command passes every swarm option to every estimator)."""
+        fields = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+        return cls(**{k: v for k, v in options.items() if k in fields})
+
+    @staticmethod
+    def registered() -> tuple[str, ...]:
+        """Every registered name, in the order the classes were defined."""
+        return tuple(_NAMED)
+
+    @staticmethod
+    def named(name: str, **options) -> Estimator:
+        """The estimator registered as ``name`` (e.g. ``"WLS"``, ``"SEDSABSO"``), built
+        with ``options`` (``sigma``, ``runs``, ...; those it does not have are ignored)."""
+        if name not in _NAMED:
+            raise ValueError(f"unknown estimator {name!r}; expected one of {tuple(_NAMED)}")
+        return _NAMED[name].from_name(name, **options)  # type: ignore[attr-defined]
+
+
+def describe(estimator: Estimator, model: TorqueModel, limits) -> dict:
+    """The settings of fitting ``model`` with ``estimator`` that do not depend on the data,
+    in the order the reports write them."""
+    own = dict(estimator.settings())
+    out = {"method": own.pop("method"), "friction": model.friction,
+           "physical": own.pop("physical"), "weights": own.pop("weights"), "limits": limits}
+    return {**out, **model.settings(), **own}

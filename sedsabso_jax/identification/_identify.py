@@ -1,0 +1,255 @@
+"""Identify a robot's base parameters (plus friction and actuator terms) from joint data::
+
+    fit = identify(robot, data, WLS("limits"), "viscous-coulomb+offset", limits=...)
+
+``data`` is a :class:`~sedsabso_jax.Measurements` or the arrays ``(q, qd, qdd, tau)``
+(each ``(samples, n)``, joint side); loading and filtering is
+:mod:`sedsabso_jax.measurements`' job. The estimator is one of :mod:`._estimators` (OLS,
+WLS, L1, Levenberg-Marquardt, a box search with any optimiser, physically consistent);
+the torque model a :class:`~._model.TorqueModel` or its friction terms as a string.
+
+0.2's call form ``identify(robot, q, qd, qdd, tau, method=..., friction=..., sigma=...,
+physical=..., ...)`` keeps working through 0.3.x with a ``DeprecationWarning``
+(:mod:`._legacy`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+import warnings
+from typing import Any
+
+import numpy as np
+
+from .. import _deprecation
+from .._output import jsonable
+from .._version import __version__
+from ..dynamics._base_parameters import BaseParameters
+from ..dynamics._robot import Robot
+from ..dynamics._urdf_writer import to_urdf
+from ..measurements._container import Measurements
+from ..optim._linear import factorize
+from ._estimators import OLS
+from ._fitting import Estimator, FitProblem, describe, per_joint
+from ._legacy import METHODS as METHODS
+from ._legacy import RegressorFit as RegressorFit
+from ._legacy import Setup as Setup
+from ._legacy import fit_regressor as fit_regressor
+from ._legacy import from_keywords, regrouped_message
+from ._legacy import prepare as prepare
+from ._legacy import swarm_box as swarm_box
+from ._metrics import nrms_over_limits
+from ._model import SMOOTH_VELOCITY, TorqueModel
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Identification:
+    """What :func:`identify` returns.
+
+    Attributes:
+        names: parameter names, base columns then extra columns (``OFF1``, ``FQ1``, ...).
+        values: the identified values, one per name.
+        model: the :class:`~._model.TorqueModel`; ``predict(q, qd, qdd)`` uses it.
+        method: the estimator's name.
+        settings: the settings used (JSON-ready).
+        fit: statistics of the fit residual on the identification data (JSON-ready):
+            per-joint RMS (``rms``), ``l1`` and ``l2`` (sum of |r| and of r^2, weighted as
+            the estimator saw them), ``nrms_limits_percent`` when ``limits`` were given,
+            ``condition_number`` of the stacked regressor (unit-norm columns), ``rank``.
+        full_params: the full parameters (12 per link) of a physical fit, else ``None``.
+        result: the optimiser's :class:`~sedsabso_jax.Result` (all runs) of a box search
+            (or the baseline's for Levenberg-Marquardt), else ``None``.
+        estimator: the estimator object.
+    """
+
+    names: tuple[str, ...]
+    values: np.ndarray
+    model: TorqueModel
+    method: str
+    settings: dict
+    fit: dict
+    full_params: np.ndarray | None = None
+    result: Any = None
+    estimator: Estimator | None = None
+
+    def predict(self, q, qd, qdd) -> np.ndarray:
+        """Predicted torques ``(..., n)`` for states ``(..., n)``."""
+        return self.model.predict(self.values, q, qd, qdd)
+
+    def urdf(self) -> str:
+        """The robot's URDF with the identified link parameters and joint friction (a
+        physical fit only: a simulator needs real bodies). Extra terms a URDF cannot
+        hold (offsets, quadratic friction, armature, ...) are listed in a comment."""
+        if self.full_params is None:
+            raise ValueError("a URDF needs the full link parameters of a physically "
+                             "consistent fit: identify with PhysicallyConsistent(...) "
+                             "(--physical)")
+        base = self.model.base.rank
+        extras = ", ".join(f"{n} = {v:.6g}" for n, v in zip(self.names[base:],
+                                                           self.values[base:]))
+        comment = (f"link parameters identified by sedsabso-jax {__version__} "
+                   f"({self.method}, physically consistent, friction {self.model.friction})"
+                   + (f"; terms URDF cannot hold: {extras}" if extras else ""))
+        return to_urdf(self.model.robot, self.full_params, comment=comment)
+
+    def as_dict(self) -> dict:
+        """Names, values, method, settings and fit statistics, JSON-ready."""
+        out = {"method": self.method, "names": self.names, "values": self.values,
+               "settings": self.settings, "fit": self.fit}
+        if self.full_params is not None:
+            out["full_params"] = self.full_params
+        return jsonable(out)
+
+    def __repr__(self) -> str:
+        rms = ", ".join(f"{r:.3g}" for r in self.fit["rms"])
+        return (f"Identification({self.method}, {len(self.names)} parameters, "
+                f"friction={self.model.friction!r}, fit RMS per joint [{rms}])")
+
+
+def check_data(robot: Robot, q, qd, qdd, tau):
+    """``q, qd, qdd, tau`` as float arrays ``(samples, n)`` of one length, finite."""
+    n = robot.n_joints
+    arrays = []
+    for name, a in (("q", q), ("qd", qd), ("qdd", qdd), ("tau", tau)):
+        a = np.asarray(a, dtype=float)
+        if a.ndim != 2 or a.shape[1] != n:
+            raise ValueError(f"{name} must have shape (samples, {n}) for robot {robot.name!r}, "
+                             f"got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"{name} contains NaN or Inf")
+        arrays.append(a)
+    lengths = {a.shape[0] for a in arrays}
+    if len(lengths) != 1:
+        raise ValueError(f"q, qd, qdd and tau need the same number of samples, got "
+                         f"{[a.shape[0] for a in arrays]}")
+    if arrays[0].shape[0] == 0:
+        raise ValueError("no samples")
+    return arrays
+
+
+def data_arrays(robot: Robot, data, *, times: bool = False):
+    """``[q, qd, qdd, tau]`` of ``data`` (a :class:`~sedsabso_jax.Measurements` or a
+    tuple of those arrays), checked; with ``times``, ``[times, q, qd, qdd, tau]`` (a tuple
+    then holds the times first)."""
+    fields = ("times", "q", "qd", "qdd", "tau") if times else ("q", "qd", "qdd", "tau")
+    if isinstance(data, Measurements):
+        arrays = [getattr(data, f) for f in fields]
+    else:
+        try:
+            arrays = list(data)
+        except TypeError:
+            arrays = []
+        if len(arrays) != len(fields) or isinstance(data, np.ndarray):
+            raise ValueError(f"data must be a Measurements or a tuple ({', '.join(fields)}) "
+                             f"of arrays, got {type(data).__name__}")
+    if not times:
+        return check_data(robot, *arrays)
+    checked = check_data(robot, *arrays[1:])
+    t = np.asarray(arrays[0], dtype=float)
+    if t.shape != (checked[0].shape[0],):
+        raise ValueError(f"times must have one entry per sample ({checked[0].shape[0]}), got "
+                         f"shape {t.shape}")
+    return [t, *checked]
+
+
+def torque_model(robot: Robot, model, *, transmission=None, base=None,
+                 smooth_velocity: float = SMOOTH_VELOCITY) -> TorqueModel:
+    """``model`` (a :class:`~._model.TorqueModel` of ``robot``, or friction terms as a
+    string, None for ``"viscous-coulomb"``) as a TorqueModel; ``transmission``, ``base``
+    and ``smooth_velocity`` build a string's model (a TorqueModel has its own)."""
+    if not isinstance(robot, Robot):
+        raise TypeError(f"robot must be a sedsabso_jax.Robot, got {type(robot).__name__}")
+    if isinstance(model, TorqueModel):
+        if model.robot.n_params != robot.n_params or model.robot.n_joints != robot.n_joints:
+            raise ValueError(f"model is a TorqueModel of robot {model.robot.name!r} with "
+                             f"{model.robot.n_joints} joints, not of {robot.name!r}")
+        given = [k for k, v in (("transmission", transmission), ("base", base)) if v is not None]
+        if smooth_velocity != SMOOTH_VELOCITY:
+            given.append("smooth_velocity")
+        if given:
+            raise ValueError(f"{', '.join(given)}: part of the TorqueModel given as model; "
+                             f"build it with TorqueModel.of(robot, ..., {given[0]}=...)")
+        return model
+    return TorqueModel.of(robot, "viscous-coulomb" if model is None else model,
+                          transmission=transmission, smooth_velocity=smooth_velocity,
+                          base=base)
+
+
+def identify(robot: Robot, data, estimator: Estimator = OLS(), model=None, *old_args,
+             limits=None, transmission=None, base: BaseParameters | None = None,
+             smooth_velocity: float = SMOOTH_VELOCITY, **old_keywords) -> Identification:
+    """Identify the base parameters (plus extra friction terms) of ``robot`` from
+    ``data``.
+
+    Args:
+        data: a :class:`~sedsabso_jax.Measurements` or ``(q, qd, qdd, tau)``, each
+            ``(samples, n)``.
+        estimator: one of :mod:`._estimators`: ``OLS()`` (default), ``WLS(sigma)``,
+            ``L1()``, ``LevenbergMarquardt()``, ``BoxSearch(solver, ...)``,
+            ``PhysicallyConsistent(OLS() or WLS(...), prior_strength=...)``.
+        model: a :class:`~._model.TorqueModel` (:meth:`~._model.TorqueModel.of`) or its
+            friction terms: ``"viscous-coulomb"`` (None) plus optional ``"+offset"``,
+            ``"+quadratic"``, ``"+smooth"``, ``"+armature"``, ``"+coupling"``.
+        limits: per-joint torque limits (N m): the fit reports its NRMS over them; needed
+            by ``sigma="limits"``.
+        transmission, base, smooth_velocity: build a friction string's model
+            (:meth:`~._model.TorqueModel.of`).
+
+    0.2's form ``identify(robot, q, qd, qdd, tau, method=..., friction=..., sigma=...,
+    physical=..., prior=..., prior_weight=..., prior_strength=..., box=..., runs=...,
+    iterations=..., seed=..., solver=...)`` works through 0.3.x with a
+    ``DeprecationWarning``.
+
+    Warns (``UserWarning``) with the condition number and the names of the columns
+    concerned when the stacked regressor is rank deficient or poorly conditioned, and
+    names the extra columns the base regressor already spans (left out).
+    """
+    if old_args or old_keywords:
+        if old_args:  # identify(robot, q, qd, qdd, tau, ...)
+            if len(old_args) != 1:
+                raise TypeError(f"identify() takes (robot, data, estimator, model), or 0.2's "
+                                f"(robot, q, qd, qdd, tau); got {4 + len(old_args)} "
+                                f"positional arguments")
+            data = (data, estimator, model, old_args[0])
+        elif not isinstance(estimator, Estimator) or model is not None:
+            raise TypeError("0.2's keyword settings (method=..., friction=..., ...) go with "
+                            "identify(robot, q, qd, qdd, tau, ...), not with an estimator")
+        _deprecation.warn("identify(robot, q, qd, qdd, tau, method=..., friction=..., ...)",
+                          "identify(robot, (q, qd, qdd, tau), estimator, model), e.g. "
+                          "identify(robot, data, WLS('limits'), 'viscous-coulomb+offset')")
+        if not isinstance(robot, Robot):
+            raise TypeError(f"robot must be a sedsabso_jax.Robot, got {type(robot).__name__}")
+        estimator, model = from_keywords(robot, old_keywords, transmission=transmission,
+                                         base=base, smooth_velocity=smooth_velocity)
+        transmission = base = None
+        smooth_velocity = SMOOTH_VELOCITY
+    if not isinstance(estimator, Estimator):
+        raise TypeError(f"estimator must be an Estimator (OLS(), WLS(...), L1(), "
+                        f"BoxSearch(...), ...), got {estimator!r}")
+    model = torque_model(robot, model, transmission=transmission, base=base,
+                         smooth_velocity=smooth_velocity)
+    limits = per_joint("limits", limits, robot.n_joints)
+    estimator.check(model, limits)
+    if model.regrouped:
+        warnings.warn(regrouped_message(model), stacklevel=_deprecation.caller_stacklevel())
+    q, qd, qdd, tau = data_arrays(robot, data)
+    t0 = time.perf_counter()
+    Y = model.regressor(q, qd, qdd)  # (T, n, d)
+    out = estimator.fit(FitProblem(model, Y, tau, limits))
+    run_s = time.perf_counter() - t0
+
+    x = out.x
+    factor0 = out.factor0 if out.factor0 is not None else factorize(
+        Y.reshape(-1, Y.shape[-1]), tau.reshape(-1))
+    rms = np.sqrt(np.mean((Y @ x - tau) ** 2, axis=0))
+    rw = out.W @ x - out.b
+    fit = {"rms": rms, "l1": float(np.abs(rw).sum()), "l2": float(rw @ rw),
+           "condition_number": factor0.condition_number, "rank": factor0.rank,
+           "samples": int(Y.shape[0]), "seconds": float(run_s)}
+    if limits is not None:
+        fit["nrms_limits_percent"] = float(np.mean(nrms_over_limits(rms, limits)))
+    settings = {**describe(estimator, model, limits), "sigma": out.sigma, **out.extra}
+    return Identification(names=model.names, values=x, model=model, method=estimator.name,
+                          settings=jsonable(settings), fit=jsonable(fit),
+                          full_params=out.full, result=out.result, estimator=estimator)

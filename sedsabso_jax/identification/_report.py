@@ -1,0 +1,168 @@
+"""What ``sedsabso-jax identify`` reports: the identified parameters, fit and validation
+metrics as text, a JSON document, and measured-against-predicted torque plots."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+
+import numpy as np
+
+from .._output import jsonable, markdown_table, pyplot, save_figure, write_json, write_text
+from ..measurements._container import Measurements
+from ._identify import Identification
+from ._metrics import Metrics, validation_metrics
+from ._validation import CrossValidation, PriorSelection, Selection
+
+
+def figure_torques(times, tau_measured, tau_predicted, joint_names, title: str):
+    """Measured against predicted torque per joint (one panel each), error in the legend."""
+    plt = pyplot()
+    tau_measured, tau_predicted = np.asarray(tau_measured), np.asarray(tau_predicted)
+    n = tau_measured.shape[1]
+    t = np.asarray(times) - float(np.asarray(times)[0])
+    fig, axes = plt.subplots(n, 1, figsize=(8, 1.6 * n + 0.8), sharex=True,
+                             constrained_layout=True, squeeze=False)
+    for j, ax in enumerate(axes[:, 0]):
+        rms = float(np.sqrt(np.mean((tau_predicted[:, j] - tau_measured[:, j]) ** 2)))
+        ax.plot(t, tau_measured[:, j], color="0.3", lw=1.2, label="measured")
+        ax.plot(t, tau_predicted[:, j], color="tab:red", lw=1, ls="--",
+                label=f"predicted (RMS error {rms:.3g} N m)")
+        ax.set_ylabel(f"{joint_names[j]}\n[N m]")
+        ax.legend(loc="best", fontsize="small")
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle(title)
+    return fig
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class IdentificationReport:
+    """An identification judged on its own data and, when given, on held-out data.
+
+    ``data`` and ``held_out`` are :class:`~sedsabso_jax.Measurements`; ``fit`` and
+    ``validation`` their :class:`~._metrics.Metrics` (``validation`` None without held-out
+    data); ``predicted`` the predicted torques of each; ``cross_validation`` the chosen
+    setting's :class:`~._validation.CrossValidation` on ``data`` and ``selection`` the
+    :class:`~._validation.Selection` it came from, ``prior_selection`` the
+    :class:`~._validation.PriorSelection` of a physical fit's pull to the prior (each None
+    when not run).
+    """
+
+    ident: Identification
+    data: Measurements
+    held_out: Measurements | None
+    limits: np.ndarray | None
+    fit: Metrics
+    validation: Metrics | None
+    predicted: tuple[np.ndarray, np.ndarray | None]
+    cross_validation: CrossValidation | None = None
+    selection: Selection | None = None
+    prior_selection: PriorSelection | None = None
+
+    @classmethod
+    def evaluate(cls, ident: Identification, data, held_out=None, limits=None, *,
+                 cross_validation=None, selection=None, prior_selection=None
+                 ) -> IdentificationReport:
+        """Predict the torques of ``data`` (and ``held_out``) and compare."""
+        fit_pred = ident.predict(data.q, data.qd, data.qdd)
+        val_pred = None if held_out is None else ident.predict(held_out.q, held_out.qd,
+                                                              held_out.qdd)
+        return cls(ident, data, held_out, limits,
+                   validation_metrics(data.tau, fit_pred, limits),
+                   None if held_out is None else validation_metrics(held_out.tau, val_pred,
+                                                                    limits),
+                   (fit_pred, val_pred), cross_validation, selection, prior_selection)
+
+    def text(self) -> str:
+        """The parameters and per-joint metrics as text (markdown tables)."""
+        ident, robot = self.ident, self.ident.model.robot
+        rows = [[str(i), name, f"{value:.6g}"]
+                for i, (name, value) in enumerate(zip(ident.names, ident.values), 1)]
+        lines = [f"{robot.name}: {len(ident.names)} parameters identified by {ident.method} "
+                 f"(friction {ident.model.friction}) from {self.data.n_samples} samples of "
+                 f"{self.data.source}", "", markdown_table(["#", "parameter", "value"], rows),
+                 "", "fit (identification data):", self.fit.table(robot.joint_names)]
+        if self.cross_validation is not None:
+            cv = self.cross_validation
+            folds = (f"{len(cv.fold_scores)} folds of the motion's phase, period "
+                     f"{cv.period_s:.4g} s" if cv.period_s is not None
+                     else f"{len(cv.fold_scores)} contiguous folds (the motion does not repeat)")
+            lines += ["", f"cross-validated on the identification data ({folds}; each fold "
+                          f"predicted by a fit to the others):", cv.metrics.table(
+                              robot.joint_names),
+                      f"CV error ({cv.measure}): {cv.score:.4f} +- {cv.standard_error:.4f} "
+                      f"(mean and standard error over the folds)"]
+        measure = "" if self.cross_validation is None else self.cross_validation.measure
+        if self.selection is not None:
+            lines += ["", "chosen by cross-validation (the simplest whose fold-by-fold excess "
+                          "over the lowest is within one standard error):",
+                      markdown_table(["method", "sigma", "friction", "parameters",
+                                      f"CV {measure}", ""],
+                                     self.selection.table())]
+        if self.prior_selection is not None:
+            lines += ["", "pull toward the a-priori parameters chosen by cross-validation (the "
+                          "strongest within one standard error of the lowest):",
+                      markdown_table(["prior strength", f"CV {measure}",
+                                      ""], self.prior_selection.table())]
+        if self.validation is not None and self.held_out is not None:
+            lines += ["", f"validation ({self.held_out.source}, {self.held_out.n_samples} "
+                          f"samples):", self.validation.table(robot.joint_names)]
+        if self.limits is None:
+            lines += ["", "NRMS over torque limits: no limits known for this robot"]
+        return "\n".join(lines)
+
+    def document(self, settings: dict) -> dict:
+        """The JSON document: parameters, fit and validation metrics, ``settings`` merged
+        with the identification's own."""
+        ident = self.ident
+        return jsonable({
+            "base_parameters": {"names": ident.names, "values": ident.values},
+            "fit": {**self.fit.as_dict(), "residual": ident.fit},
+            "validation": None if self.validation is None else self.validation.as_dict(),
+            "cross_validation": None if self.cross_validation is None else {
+                **self.cross_validation.as_dict(),
+                "selection": None if self.selection is None else self.selection.as_dict(),
+                "prior_strength": None if self.prior_selection is None
+                else self.prior_selection.as_dict()},
+            "settings": {**settings, **ident.settings},
+        })
+
+    def figures(self) -> dict:
+        """``{file name: figure}``: measured against predicted torques per data set."""
+        ident, robot = self.ident, self.ident.model.robot
+        sets: list[tuple[str, Measurements, np.ndarray | None, str]] = [
+            ("torques_fit.png", self.data, self.predicted[0], "identification data")]
+        if self.held_out is not None:
+            sets.append(("torques_validation.png", self.held_out, self.predicted[1],
+                         "held-out data"))
+        return {name: figure_torques(d.times, d.tau, pred, robot.joint_names,
+                                     f"{robot.name}, {ident.method}: {label}")
+                for name, d, pred, label in sets}
+
+    def write(self, settings: dict, out_dir=None, json_path=None, urdf_path=None
+              ) -> list[str]:
+        """Write the figures and ``identification.json`` into ``out_dir`` (created if
+        missing), the JSON also to ``json_path`` and the identified robot's URDF to
+        ``urdf_path`` (their directories created); everything is rendered before the first
+        file is written. Returns the paths written."""
+        document = self.document(settings)
+        urdf = self.ident.urdf() if urdf_path is not None else None
+        figures = self.figures() if out_dir is not None else {}
+        written = []
+        if out_dir is not None:
+            os.makedirs(out_dir, exist_ok=True)
+            for name, fig in figures.items():
+                save_figure(fig, os.path.join(out_dir, name))
+                written.append(os.path.join(out_dir, name))
+            write_json(os.path.join(out_dir, "identification.json"), document)
+            written.append(os.path.join(out_dir, "identification.json"))
+        if json_path is not None:
+            os.makedirs(os.path.dirname(os.path.abspath(json_path)), exist_ok=True)
+            write_json(json_path, document)
+            written.append(os.fspath(json_path))
+        if urdf_path is not None and urdf is not None:
+            os.makedirs(os.path.dirname(os.path.abspath(urdf_path)), exist_ok=True)
+            write_text(urdf_path, urdf)
+            written.append(os.fspath(urdf_path))
+        return written

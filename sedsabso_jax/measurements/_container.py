@@ -1,0 +1,207 @@
+"""The measurements container: times, ``q, qd, qdd, tau`` along one trajectory, checked.
+
+A :class:`Measurements` holds, on numpy arrays, ``times (T,)`` in seconds and ``q, qd,
+qdd, tau (T, n)``: joint positions [rad or m], velocities, accelerations and torques
+[N m or N], with the file it came from (``source``) and a record of what was derived or
+filtered (``info``). It is immutable (read-only arrays); :meth:`Measurements.slice`,
+:meth:`Measurements.downsample` return new ones.
+
+Every problem with a file or an array (NaN/Inf, missing key or column, joint count,
+ragged lengths, non-increasing times, empty file, not a data file) is a ValueError that
+names the source and the field, with what was expected and what was found; a file that
+does not exist is a FileNotFoundError.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import _formats as formats
+from ._signal import median_rate
+
+#: Field name (as in the files) -> attribute of :class:`Measurements`.
+ATTRIBUTES = {"positions": "q", "velocities": "qd", "accelerations": "qdd", "torques": "tau"}
+
+
+def as_float(source: str, field: str, value, ndim: int) -> np.ndarray:
+    """``value`` as a float64 array of ``ndim`` dimensions, or a ValueError naming it."""
+    try:
+        arr = np.asarray(value)
+    except Exception as err:  # any conversion failure is bad input
+        raise ValueError(f"{source}: field {field!r}: not an array ({err})") from err
+    if arr.dtype.kind not in "biuf":
+        raise ValueError(
+            f"{source}: field {field!r}: expected real numbers, got dtype {arr.dtype}"
+        )
+    if arr.ndim != ndim:
+        want = "(T,)" if ndim == 1 else "(T, n_joints)"
+        raise ValueError(
+            f"{source}: field {field!r}: expected a {ndim}-D array {want}, got shape {arr.shape}"
+        )
+    arr = np.array(arr, dtype=np.float64)  # a copy: the caller's array stays its own
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        where = np.argwhere(bad)[0]
+        at = f"sample {where[0] + 1} of {arr.shape[0]}" + (f", joint {where[1] + 1}"
+                                                         if ndim == 2 else "")
+        raise ValueError(
+            f"{source}: field {field!r}: expected finite numbers, got {int(bad.sum())} "
+            f"NaN/Inf value(s), the first at {at}"
+        )
+    return arr
+
+
+def check_fields(source: str, fields: Mapping[str, Any], n_joints: int | None = None,
+                  ) -> dict[str, np.ndarray]:
+    """Check times/positions/torques (+ optional velocities/accelerations) belong together.
+
+    Returns float64 copies. Missing optional fields are returned as None.
+    """
+    times = as_float(source, "times", fields["times"], 1)
+    T = times.shape[0]
+    if T < 2:
+        raise ValueError(f"{source}: field 'times': expected at least 2 samples, got {T}")
+    steps = np.diff(times)
+    bad = np.flatnonzero(steps <= 0.0)
+    if bad.size:
+        k = int(bad[0])
+        raise ValueError(
+            f"{source}: field 'times': expected strictly increasing time stamps, got "
+            f"times[{k + 1}] = {float(times[k + 1])!r} after times[{k}] = {float(times[k])!r} "
+            f"({bad.size} non-increasing step(s))"
+        )
+    out: dict[str, np.ndarray | None] = {"times": times}
+    q = as_float(source, "positions", fields["positions"], 2)
+    n = q.shape[1]
+    if n_joints is not None and n != n_joints:
+        raise ValueError(
+            f"{source}: field 'positions': expected {n_joints} joints (n_joints={n_joints}), "
+            f"got {n} columns, shape {q.shape}"
+        )
+    if n < 1:
+        raise ValueError(f"{source}: field 'positions': expected at least 1 joint, got 0")
+    for field in ("positions", "velocities", "accelerations", "torques"):
+        value = fields.get(field)
+        if value is None:
+            out[field] = None
+            continue
+        arr = q if field == "positions" else as_float(source, field, value, 2)
+        if arr.shape[0] != T:
+            raise ValueError(
+                f"{source}: field {field!r}: expected {T} samples (as 'times'), got "
+                f"{arr.shape[0]} (ragged lengths)"
+            )
+        if arr.shape[1] != n:
+            raise ValueError(
+                f"{source}: field {field!r}: expected {n} joints (as 'positions'), got "
+                f"{arr.shape[1]} columns, shape {arr.shape}"
+            )
+        out[field] = arr
+    if out["torques"] is None:
+        raise ValueError(f"{source}: field 'torques': missing")
+    return out  # type: ignore[return-value]  # velocities, accelerations may be None
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Measurements:
+    """Joint measurements along one trajectory (numpy, float64, read-only).
+
+    Attributes:
+        times: ``(T,)`` strictly increasing time stamps [s].
+        q, qd, qdd: ``(T, n)`` joint positions, velocities, accelerations.
+        tau: ``(T, n)`` joint torques.
+        source: the file read, ``"simulated"``, or ``"arrays"``.
+        info: what was derived, filtered, sliced (JSON-friendly values).
+
+    Construction checks shapes, finiteness and times (ValueError naming the field).
+    """
+
+    times: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    tau: np.ndarray
+    source: str = "arrays"
+    info: dict = dataclasses.field(default_factory=dict)
+
+    def __post_init__(self):
+        source = str(self.source)
+        checked = check_fields(source, {
+            "times": self.times, "positions": self.q, "velocities": self.qd,
+            "accelerations": self.qdd, "torques": self.tau,
+        })
+        for field, attr in (("times", "times"), *ATTRIBUTES.items()):
+            arr = checked[field]
+            if arr is None:
+                raise ValueError(f"{source}: field {field!r}: missing ({attr}=None)")
+            arr.flags.writeable = False
+            object.__setattr__(self, attr, arr)
+        object.__setattr__(self, "source", source)
+        object.__setattr__(self, "info", dict(self.info))
+
+    @property
+    def n_joints(self) -> int:
+        return self.q.shape[1]
+
+    @property
+    def n_samples(self) -> int:
+        return self.times.shape[0]
+
+    @property
+    def rate(self) -> float:
+        """Median sample rate [Hz]."""
+        return median_rate(self.times)
+
+    @property
+    def duration(self) -> float:
+        """``times[-1] - times[0]`` [s]."""
+        return float(self.times[-1] - self.times[0])
+
+    def __repr__(self) -> str:
+        return (f"Measurements({self.source!r}, {self.n_samples} samples x {self.n_joints} "
+                f"joints, {self.rate:.4g} Hz)")
+
+    def _with(self, index, note: str) -> Measurements:
+        info = dict(self.info)
+        info["operations"] = [*info.get("operations", []), note]
+        return Measurements(self.times[index], self.q[index], self.qd[index], self.qdd[index],
+                            self.tau[index], source=self.source, info=info)
+
+    def slice(self, start: int | None = None, stop: int | None = None,
+              step: int = 1) -> Measurements:
+        """Samples ``start:stop:step`` (Python slice rules); at least 2 must remain."""
+        step = positive_int("step", step)
+        return self._with(slice(start, stop, step), f"slice {start}:{stop}:{step}")
+
+    def downsample(self, k: int) -> Measurements:
+        """Every ``k``-th sample, starting with the first. No anti-alias filter: load with
+        a cutoff below the new Nyquist frequency first if the signals need one."""
+        k = positive_int("downsample factor k", k)
+        return self._with(slice(None, None, k), f"downsample {k}")
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The arrays under the ``.npz`` key names (:data:`._formats.NPZ_KEYS`)."""
+        return {"times": self.times, "positions": self.q, "velocities": self.qd,
+                "accelerations": self.qdd, "torques": self.tau}
+
+    def save(self, path) -> Path:
+        """Write to ``path``: ``.npz`` (keys :data:`._formats.NPZ_KEYS`) or ``.csv``
+        (header ``time,q1..qn,qd1..qdn,qdd1..qddn,tau1..taun``, 17 significant digits).
+
+        Atomic: written to a temporary file in the same directory, flushed, then moved
+        over ``path`` with ``os.replace``; on any failure the temporary file is removed
+        and an existing ``path`` is left as it was. ``source`` and ``info`` are not saved.
+        """
+        return formats.write(path, self.arrays())
+
+
+def positive_int(label: str, value) -> int:
+    """``value`` as an int, or a ValueError naming ``label`` unless it is an integer >= 1."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+        raise ValueError(f"{label} must be an integer >= 1, got {value!r}")
+    return int(value)

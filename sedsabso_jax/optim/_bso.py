@@ -1,0 +1,132 @@
+"""Beetle Swarm Optimisation (BSO): T. Wang, L. Yang, Q. Liu, "Beetle Swarm Optimization
+Algorithm: Theory and Application", arXiv:1808.00206 (2018); the paper's Eq. 10-13.
+
+Per iteration, for every beetle at once (the authors' demo code, ``docs/paper-notes.md``
+Sec. 3)::
+
+    xl = x + V d/2,  xr = x - V d/2                 # antennae, d = delta / c (Eq. 13)
+    xi = -delta V sign(f(xl) - f(xr))               # toward the better antenna (Eq. 12)
+    V  = clip(w V + c1 r1 (pbest - x) + c2 r2 (g - x), -Vmax, Vmax)      (Eq. 11)
+    x  = clip(x + lam V + (1 - lam) xi, lower, upper)                    (Eq. 10)
+
+The authors' code uses ``+delta V sign(...)``, which moves toward the WORSE antenna when
+minimising; ``literal_sign=True`` restores it. With a linear fitness embedding (Eq. 17)
+the antennae cost no product with ``W`` (``W xl = W x + d/2 W V``) and only their
+difference is needed, so an iteration costs one product with ``W`` (new positions and
+velocities stacked) and one pass over the residuals for 3 evaluations: the antennae of
+the new positions are evaluated with them and carried to the next iteration as one
+number per beetle (:meth:`~._fitness.L1Residual.evaluate_with_antennae`). Asked for
+points (``ask``/``tell``), an iteration asks for each beetle's new position and its two
+antennae: ``3 N`` points.
+
+:class:`BeetleSwarm` holds this step and its hyperparameters; :class:`BSO` runs it with a
+constant population, :class:`~sedsabso_jax.SEDSABSO` adds annealing and a shrinking one.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+
+from ._solver import is_concrete
+from ._swarm import (
+    AbstractSwarm,
+    SwarmState,
+    check_population,
+    check_velocity_update,
+    evaluate,
+    update_bests,
+)
+
+
+class BeetleSwarm(AbstractSwarm):
+    """The beetle update of Eq. 10-13 and its hyperparameters (defaults: the paper's Sec.
+    5.2); the population and the guide are the subclass's."""
+
+    c1: float = 2.0  # c1: cognitive coefficient (Eq. 11)
+    c2: float = 2.0  # c2: social coefficient (Eq. 11)
+    w: float = 0.8  # w: inertia weight (Eq. 11)
+    lam: float = 0.9  # lambda: share of the velocity step vs the antenna step (Eq. 10)
+    delta: float = 0.05  # delta: antenna step size, constant (Eq. 12)
+    c: float = 2.0  # c: ratio of step size to antenna distance, d = delta / c (Eq. 13)
+    vmax_fraction: float = 0.5  # Vmax = vmax_fraction * (upper - lower), the authors' code
+    literal_sign: bool = False  # True: the authors' sign, toward the worse antenna
+
+    def __check_init__(self) -> None:
+        if not is_concrete(self.c1, self.c2, self.vmax_fraction, self.lam, self.delta,
+                           self.c):
+            return
+        check_velocity_update(self.c1, self.c2, self.vmax_fraction)
+        if not 0.0 <= self.lam <= 1.0:
+            raise ValueError(f"lam must lie in [0, 1], got {self.lam}")
+        if self.delta <= 0 or self.c <= 0:
+            raise ValueError(f"delta and c must be > 0, got delta={self.delta}, c={self.c}")
+
+    def evaluations(self, n_active):
+        """Three per beetle: its new position and its two antennae (Eq. 12)."""
+        return 3 * n_active
+
+    @property
+    def antenna(self) -> float:
+        """``a``: the antennae sit at ``x +- a V``, ``a = d / 2`` with ``d = delta / c``
+        (Eq. 13)."""
+        d = self.delta / self.c
+        return 0.5 * d
+
+    def move(self, s: SwarmState, draws, lower, upper):
+        """Eq. 10-13 for every slot with ``draws`` the uniforms ``(r1, r2)`` of Eq. 11
+        (stacked or not): the antenna difference ``f(xl) - f(xr)`` at the current
+        positions is the state's (computed with their fitness)."""
+        r1, r2 = draws[0], draws[1]
+        direction = jnp.nan_to_num(jnp.sign(s.antennae))  # inf - inf: no preference
+        if not self.literal_sign:
+            direction = -direction
+        xi = self.delta * s.v * direction[:, None]
+        vmax = self.vmax_fraction * (upper - lower)
+        v = self.w * s.v + self.c1 * r1 * (s.pbest_x - s.x) + self.c2 * r2 * (s.guide_x - s.x)
+        v = jnp.clip(v, -vmax, vmax)
+        return jnp.clip(s.x + self.lam * v + (1.0 - self.lam) * xi, lower, upper), v
+
+    def absorb_beetles(self, s: SwarmState, raw, diff, diff_bad):
+        """The moved beetles' fitness and antennae taken in: personal and best-ever
+        updated; returns the state and the swarm's global best ``(x, f)`` among the active
+        slots (the guide is the subclass's)."""
+        f, bad = evaluate(None, s.x, s.active, raw)
+        bad = s.slot_nonfinite + bad + jnp.where(s.active, s.antennae_bad, 0)
+        n_active = jnp.sum(s.active, dtype=jnp.int32)
+        s = eqx.tree_at(
+            lambda s: (s.antennae, s.antennae_bad, s.n_evaluations, s.slot_nonfinite), s,
+            (diff, diff_bad, s.n_evaluations + 3 * n_active, bad))
+        return update_bests(s, s.x, f)
+
+    def beetle_step(self, fitness, s: SwarmState, lower, upper, r1, r2):
+        """Eq. 10-13 for every slot, with ``r1, r2`` the uniform draws of Eq. 11; returns
+        the state with bests updated and the swarm's global best (x, f) among the active
+        slots."""
+        x, v = self.move(s, (r1, r2), lower, upper)
+        raw, diff, diff_bad = self.evaluate_moved(fitness, x, v)
+        return self.absorb_beetles(eqx.tree_at(lambda s: (s.x, s.v), s, (x, v)), raw, diff,
+                                   diff_bad)
+
+
+class BSO(BeetleSwarm):
+    """Beetle swarm with a constant population. Defaults: the paper's Sec. 5.2."""
+
+    n_beetles: int = 50  # N: population size
+
+    def __check_init__(self) -> None:
+        check_population(self.n_beetles, "n_beetles")
+
+    @classmethod
+    def paper(cls) -> BSO:
+        """The paper's settings (Sec. 5.2): N = 50, c1 = c2 = 2, w = 0.8, lambda = 0.9,
+        delta = 0.05, c = 2; Vmax = 0.5 (ub - lb) as in the authors' code."""
+        return cls()
+
+    @property
+    def n_slots(self) -> int:
+        return self.n_beetles
+
+    def absorb(self, s: SwarmState, raw, diff, diff_bad) -> SwarmState:
+        s, (gx, gf) = self.absorb_beetles(s, raw, diff, diff_bad)
+        return eqx.tree_at(lambda s: (s.guide_x, s.guide_f), s, (gx, gf))

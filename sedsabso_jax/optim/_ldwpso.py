@@ -1,0 +1,64 @@
+"""Linearly decreasing inertia weight PSO (LDWPSO): Y. Shi, R. Eberhart, "A modified
+particle swarm optimizer", IEEE ICEC 1998; "Empirical study of particle swarm
+optimization", CEC 1999; ``docs/paper-notes.md`` Sec. 5::
+
+    w(t) = w_start - (w_start - w_end) t / (K - 1)
+    V = clip(w(t) V + c1 r1 (pbest - x) + c2 r2 (g - x), -Vmax, Vmax)
+    x = clip(x + V, lower, upper)
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+
+from ._solver import is_concrete
+from ._swarm import (
+    AbstractSwarm,
+    SwarmState,
+    check_population,
+    check_velocity_update,
+    evaluate,
+    update_bests,
+)
+
+
+class LDWPSO(AbstractSwarm):
+    """PSO with inertia falling linearly from 0.9 to 0.4. Defaults: the paper's Sec. 5.2."""
+
+    n_particles: int = 50  # N: population size
+    c1: float = 2.0  # c1: cognitive coefficient
+    c2: float = 2.0  # c2: social coefficient
+    w_start: float = 0.9  # w(0): inertia at the first iteration
+    w_end: float = 0.4  # w(K - 1): inertia at the last iteration
+    vmax_fraction: float = 0.5  # Vmax = vmax_fraction * (upper - lower)
+
+    def __check_init__(self) -> None:
+        check_population(self.n_particles, "n_particles")
+        if is_concrete(self.c1, self.c2, self.vmax_fraction):
+            check_velocity_update(self.c1, self.c2, self.vmax_fraction)
+
+    @classmethod
+    def paper(cls) -> LDWPSO:
+        """N = 50, c1 = c2 = 2, w from 0.9 to 0.4, Vmax = 0.5 (ub - lb)."""
+        return cls()
+
+    @property
+    def n_slots(self) -> int:
+        return self.n_particles
+
+    def move(self, s: SwarmState, draws, lower, upper):
+        w = self.w_start - (self.w_start - self.w_end) * s.t / max(s.iterations - 1, 1)
+        r1, r2 = draws
+        vmax = self.vmax_fraction * (upper - lower)
+        v = w * s.v + self.c1 * r1 * (s.pbest_x - s.x) + self.c2 * r2 * (s.guide_x - s.x)
+        v = jnp.clip(v, -vmax, vmax)
+        return jnp.clip(s.x + v, lower, upper), v
+
+    def absorb(self, s: SwarmState, raw, diff=None, diff_bad=None) -> SwarmState:
+        f, bad = evaluate(None, s.x, s.active, raw)
+        s = eqx.tree_at(lambda s: (s.n_evaluations, s.slot_nonfinite), s,
+                        (s.n_evaluations + jnp.sum(s.active, dtype=jnp.int32),
+                         s.slot_nonfinite + bad))
+        s, (gx, gf) = update_bests(s, s.x, f)
+        return eqx.tree_at(lambda s: (s.guide_x, s.guide_f), s, (gx, gf))
