@@ -12,7 +12,7 @@ held-out error of every run is in the JSON and its range in the table. Times: wa
 of ``identify`` (building the regressor included, its compile excluded by a warm-up call;
 optimistix's and the swarms' compile included, and given apart).
 
-    python benchmarks/kuka_real.py [--json benchmarks/results/kuka_real.json] [--no-swarms]
+    python -m benchmarks.kuka_real [--json benchmarks/results/kuka_real.json] [--no-swarms]
                                    [--runs 3]
 """
 
@@ -31,7 +31,6 @@ import jax
 import numpy as np
 
 import sedsabso_jax as sj
-from sedsabso_jax.identification import identify, validation_metrics
 
 LIMITS = np.array([176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0])
 FIELDS = ("positions", "velocities", "accelerations", "torques")
@@ -85,6 +84,7 @@ def main(argv=None):
     ap.add_argument("--no-swarms", action="store_true")
     ap.add_argument("--runs", type=int, default=3, help="swarm runs (seeds) per setting")
     args = ap.parse_args(argv)
+    jax.config.update("jax_enable_x64", True)
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the URDF's duplicate <origin> note
@@ -93,15 +93,15 @@ def main(argv=None):
     train = load(os.path.join(args.data, "measurements_1.npz"))
     test = load(os.path.join(args.data, "measurements_2.npz"))
     common = dict(base=base, limits=LIMITS)
-    identify(robot, train, **common)  # compile the regressor for this sample count
+    sj.identify(robot, train, **common)  # compile the regressor for this sample count
 
     rows = []
     for label, friction, estimator in configurations(not args.no_swarms, args.runs):
         t0 = time.perf_counter()
-        ident = identify(robot, train, estimator, friction, **common)
+        ident = sj.identify(robot, train, estimator, friction, **common)
         seconds = time.perf_counter() - t0
         tau_pred = ident.predict(*test[:3])
-        metrics = validation_metrics(test[3], tau_pred, LIMITS)
+        metrics = sj.validation_metrics(test[3], tau_pred, LIMITS)
         held, per_joint = metrics.nrms_limits_percent, metrics.nrms_limits_percent_per_joint
         row = {"label": label, "friction": friction, "method": ident.method,
                "weights": ident.settings["weights"], "physical": ident.settings["physical"],
@@ -111,15 +111,14 @@ def main(argv=None):
                "fit_l1_weighted": ident.fit["l1"], "seconds": seconds,
                "n_parameters": len(ident.names)}
         if ident.full_params is not None:
-            row["physically_consistent"] = sj.identification.is_physically_consistent(
-                ident.full_params)
+            row["physically_consistent"] = sj.is_physically_consistent(ident.full_params)
             row["physical_fit"] = ident.settings["physical_fit"]
         if "compile_s" in ident.settings:  # LM and swarms: compile time apart
             row.update(compile_s=ident.settings["compile_s"], run_s=ident.settings["run_s"])
         if "solver" in ident.settings:
             X = np.atleast_2d(np.asarray(ident.result.x, dtype=float))
             Yt = ident.model.regressor(*test[:3])
-            runs_held = [validation_metrics(test[3], Yt @ x, LIMITS).nrms_limits_percent
+            runs_held = [sj.validation_metrics(test[3], Yt @ x, LIMITS).nrms_limits_percent
                          for x in X]
             row.update(solver=ident.settings["solver"], box=ident.settings["box"],
                        runs=len(runs_held), heldout_runs_percent=runs_held,

@@ -1,6 +1,6 @@
 """mealpy's and evosax's particle swarms on the paper's identification problem: same
 process, same fitness (Eq. 17, ``f(p) = sum |W p - tau|``), same budget (50 particles,
-``iterations`` generations after the initial swarm) as the rows of ``swarms.py``.
+``iterations`` generations after the initial swarm) as the rows of :mod:`benchmarks.swarms`.
 
 - mealpy ``OriginalPSO`` (numpy, one particle's fitness per call, as mealpy evaluates it):
   ``w = 0.8, c1 = c2 = 2``; mealpy's own bound handling (a coordinate that leaves the box
@@ -25,7 +25,7 @@ dependencies (it needs pandas at import; opfunu only appears in its docstrings):
 
     pip install "evosax>=0.3.2" pandas
     pip install --no-deps "mealpy==3.0.3"
-    python benchmarks/peers.py [--iterations 600] [--json out.json]
+    python -m benchmarks.peers [--iterations 600] [--json out.json]
 """
 
 from __future__ import annotations
@@ -162,9 +162,11 @@ def main():
     parser.add_argument("--iterations", type=int, default=600)
     parser.add_argument("--json", default=None)
     args = parser.parse_args()
+    import jax
 
     from benchmarks.problems import rs010n_problem
 
+    jax.config.update("jax_enable_x64", True)
     prob, lo, hi, true = rs010n_problem()
     W, tau = np.asarray(prob.W), np.asarray(prob.tau)
     rows = []

@@ -1,5 +1,5 @@
 """Published models of two of the repository's real robots, on the same recordings, folds
-and measure as ``benchmarks/real_robots.py``:
+and measure as :mod:`benchmarks.real_robots`:
 
 - Franka Emika Panda: the model of Gaz et al. (IEEE RA-L 4(4), 2019; link parameters of
   the supplementary material's tables and the sigmoid joint friction,
@@ -17,7 +17,7 @@ and measure as ``benchmarks/real_robots.py``:
 Gaz et al.'s identification used this very run among its data, and FIGAROH's this very
 recording: for them nothing is held out. NRMS over the joint torque limits [%].
 
-    python benchmarks/published.py [--json benchmarks/results/published.json]
+    python -m benchmarks.published [--json benchmarks/results/published.json]
                                    [--nested benchmarks/results/real_robots.json]
 """
 
@@ -28,23 +28,20 @@ import csv
 import json
 import platform
 import re
-import sys
 import tempfile
 import time
 import warnings
 from pathlib import Path
 
+import jax
 import numpy as np
 
 import sedsabso_jax as sj
-from sedsabso_jax.dynamics.inertia import params_from_com, pseudo_inertia
-from sedsabso_jax.dynamics.limits import joint_limits
-from sedsabso_jax.dynamics.robots import FRANKA_PANDA_MDH, from_mdh
-from sedsabso_jax.identification.validation import phase_folds
-
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "data"))
-import real_robots  # noqa: E402  (the repository's data folder)
+from benchmarks.output import to_json
+from data import real_robots
+from sedsabso_jax.dynamics import joint_limits, params_from_com, pseudo_inertia
+from sedsabso_jax.identification import phase_folds
+from sedsabso_jax.robots import FRANKA_PANDA_MDH, from_mdh
 
 GAZ = real_robots.PANDA / "gaz2019_parameters.json"
 FIGAROH_BASE = real_robots.TX40 / "TX40_bp_5.csv"
@@ -250,7 +247,7 @@ def nested_row(nested: dict, prefix: str, data, period) -> dict:
     if row["samples"] != data.n_samples or not np.isclose(row["period_s"] or 0, period or 0):
         raise RuntimeError(f"{prefix}: the nested benchmark's data differ from these "
                            f"(samples {row['samples']} vs {data.n_samples}); rerun "
-                           "benchmarks/real_robots.py")
+                           "python -m benchmarks.real_robots")
     h = row["nested_held_out_percent"]["default (chosen by cross-validation)"]
     return {"held_out_stretches": h, "whole_run_fit": row["fit_percent"],
             "chosen_on_all_data": row["chosen_on_all_data"]}
@@ -342,6 +339,7 @@ def main(argv=None):
     ap.add_argument("--nested", default="benchmarks/results/real_robots.json",
                     help="the nested benchmark's JSON, for the default's held-out figures")
     args = ap.parse_args(argv)
+    jax.config.update("jax_enable_x64", True)
     nested = json.loads(Path(args.nested).read_text())
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
@@ -385,7 +383,7 @@ def main(argv=None):
     doc = {"machine": platform.processor() or platform.machine(), "rows": rows,
            "seconds": time.perf_counter() - t0, "versions": {"sedsabso_jax": sj.__version__}}
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.json).write_text(json.dumps(sj._output.jsonable(doc), indent=2) + "\n")
+    Path(args.json).write_text(to_json(doc))
     print(f"written: {args.json}")
 
 

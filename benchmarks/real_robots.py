@@ -3,7 +3,7 @@
 torque sensors) and the Staubli TX40 (motor side, coupled wrist).
 
 The default chooses method, weighting and torque model by cross-validation over stretches
-of the motion's phase (``identification/validation.py``). Its generalisation is measured
+of the motion's phase (``sj.select_and_identify``). Its generalisation is measured
 by NESTED cross-validation: the recording's phase is cut into 5 folds; for each, the whole
 choice is made on the other 4 (its own 4-fold cross-validation) and the chosen model,
 fitted to them, predicts the held-out stretch, a part of the motion no choice or fit saw.
@@ -15,7 +15,7 @@ chosen by the inner cross-validation (``identify --physical --prior-strength cv`
 ``--no-physical`` leaves it out, the slow part). The KUKA's second
 run repeats the first's trajectory: its figure measures repeatability, not generalisation.
 
-    python benchmarks/real_robots.py [--json benchmarks/results/real_robots.json] [--no-physical]
+    python -m benchmarks.real_robots [--json benchmarks/results/real_robots.json] [--no-physical]
 
 Figures: NRMS over the joint torque limits [%] (RMS error / (2 limit), mean over joints).
 """
@@ -23,21 +23,19 @@ Figures: NRMS over the joint torque limits [%] (RMS error / (2 limit), mean over
 from __future__ import annotations
 
 import argparse
-import json
 import platform
-import sys
 import time
 import warnings
 from pathlib import Path
 
+import jax
 import numpy as np
 
 import sedsabso_jax as sj
-from sedsabso_jax.dynamics.limits import joint_limits
-from sedsabso_jax.identification.validation import phase_folds
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "data"))
-import real_robots  # noqa: E402  (the repository's data folder)
+from benchmarks.output import to_json
+from data import real_robots
+from sedsabso_jax.dynamics import joint_limits
+from sedsabso_jax.identification import phase_folds
 
 PHYSICAL = "physical, chosen by cross-validation (model and pull to the prior)"
 FIXED = {
@@ -142,6 +140,7 @@ def main(argv=None):
     ap.add_argument("--no-physical", action="store_true",
                     help="leave out the physically consistent choice (the slow part)")
     args = ap.parse_args(argv)
+    jax.config.update("jax_enable_x64", True)
     import tempfile
 
     rows = []
@@ -169,7 +168,7 @@ def main(argv=None):
     doc = {"machine": platform.processor() or platform.machine(), "rows": rows,
            "versions": {"sedsabso_jax": sj.__version__}}
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.json).write_text(json.dumps(sj._output.jsonable(doc), indent=2) + "\n")
+    Path(args.json).write_text(to_json(doc))
     print(f"written: {args.json}")
 
 

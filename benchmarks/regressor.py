@@ -10,9 +10,9 @@ Before timing, the two regressors are checked to agree.
 A floor: the result is ``samples x n x 12 n`` float64 (47 MB for the KUKA at 10,000
 samples); the time to fill a fresh array of that size with numpy is printed beside. The
 regressor runs where JAX runs (chunks of 16 / 8 samples on a CPU, all at once on a GPU,
-see ``sedsabso_jax.dynamics.regressor.chunk_size``); the JSON names the device.
+see ``sedsabso_jax.dynamics.chunk_size``); the JSON names the device.
 
-    python benchmarks/regressor.py [--samples 10000] [--repeats 15] [--json out.json]
+    python -m benchmarks.regressor [--samples 10000] [--repeats 15] [--json out.json]
 
 Typical output (2-core CPU, see README):
 
@@ -31,9 +31,9 @@ from importlib import resources
 import jax
 import numpy as np
 import pinocchio as pin
-from device import describe, device_info
 
 import sedsabso_jax as sj
+from benchmarks.device import describe, device_info
 
 PIN_TO_OURS = np.array([4, 6, 9, 5, 7, 8, 0, 1, 2, 3])
 
@@ -106,6 +106,7 @@ def main():
     parser.add_argument("--repeats", type=int, default=15)
     parser.add_argument("--json", default=None)
     args = parser.parse_args()
+    jax.config.update("jax_enable_x64", True)
     rng = np.random.default_rng(0)
     rows = []
     rs = sj.robots.rs010n()

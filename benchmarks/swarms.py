@@ -10,8 +10,8 @@ final fitness and mean largest absolute base-parameter error over the 10 runs; S
 BSO time from alternating pairs. Also: BSO with the authors' literal sign, all three with
 Vmax = 0.1 (ub - lb) and SEDSABSO with 0.05, OLS / LM / GN / L1-LP, and pyswarms'
 GlobalBestPSO (50 particles, w = 0.8, c1 = c2 = 2, numpy fitness over the swarm), mealpy's
-OriginalPSO and evosax's PSO (``peers.py``; same fitness, same budget; float32 computed
-in float32 throughout).
+OriginalPSO and evosax's PSO (:mod:`benchmarks.peers`; same fitness, same budget; float32
+computed in float32 throughout).
 
 Speed against evosax's PSO: the three swarms and evosax's PSO, float64 and float32,
 compiled first, then one run each in turn for ``--ratio-seeds`` seeds in the same
@@ -21,7 +21,7 @@ one compiled call (``minimise(runs=k)``, ``batch="auto"``: in sequence on a CPU,
 on an accelerator; evosax's run vmapped over keys), one call timed after compilation.
 The JSON names the device (platform, kind, CPU model).
 
-    python benchmarks/swarms.py [--json out.json] [--quick] [--runs-per-call 1,10,100,1000]
+    python -m benchmarks.swarms [--json out.json] [--quick] [--runs-per-call 1,10,100,1000]
 
 About 20 minutes on the 2-core CPU, most of it the 1000-run calls.
 """
@@ -35,23 +35,21 @@ import time
 import jax
 import jax.numpy as jnp
 import numpy as np
-import peers
-from device import describe, device_info
 
 import sedsabso_jax as sj
+from benchmarks import peers
+from benchmarks.device import describe, device_info
+from benchmarks.problems import rs010n_problem
 from sedsabso_jax import baselines
-from sedsabso_jax.optim import driver
 
 
-def problem(samples=1000, seed=0, box=0.1):
-    base = sj.base_parameters(sj.robots.rs010n())
-    rng = np.random.default_rng(seed)
-    q = rng.uniform(-np.pi, np.pi, (samples, 3))
-    qd, qdd = rng.standard_normal((2, samples, 3))
-    true = np.asarray(base.values)
-    tau = np.asarray(base.regressor(q, qd, qdd)) @ true
-    half = np.maximum(box * np.abs(true), box)
-    return sj.L1Residual.from_base(base, q, qd, qdd, tau), true - half, true + half, true
+def batch_label() -> str:
+    """How ``minimise(runs=k)`` with ``batch="auto"`` shares a call here (its docstring):
+    in sequence on a single CPU device, else vmapped (on one accelerator, in chunks that
+    fit its memory when all runs at once would not)."""
+    if jax.default_backend() == "cpu" and jax.device_count() == 1:
+        return "in sequence"
+    return "vmap"
 
 
 def swarm_row(name, solver, prob, lo, hi, true, iterations, dtype, runs=10):
@@ -131,6 +129,7 @@ def runs_per_call(prob, lo, hi, iterations, dtypes, counts):
     after the compiling call), per method and dtype; evosax's PSO vmapped over keys."""
     W, tau = np.asarray(prob.W), np.asarray(prob.tau)
     rows = []
+    batch = batch_label()
     for dtype in dtypes:
         name = jnp.dtype(dtype).name
         for k in counts:
@@ -140,9 +139,6 @@ def runs_per_call(prob, lo, hi, iterations, dtypes, counts):
                                     iterations=iterations, dtype=dtype, runs=k)
                 r = sj.minimise(prob, solver, lo, hi, key=jax.random.key(1),
                                 iterations=iterations, dtype=dtype, runs=k)
-                batch = driver._batching("auto", k, jax.device_count() > 1,
-                                         driver.run_bytes(solver, prob, len(lo), dtype,
-                                                          iterations))
                 rows.append({"method": method, "dtype": name, "runs": k,
                              "batch": batch, "compile_s": first.compile_s,
                              "call_s": r.run_s, "per_run_s": r.run_s / k})
@@ -195,10 +191,11 @@ def main():
     parser.add_argument("--runs-per-call", default="1,10,100,1000",
                         help="comma-separated run counts per compiled call ('' to skip)")
     args = parser.parse_args()
+    jax.config.update("jax_enable_x64", True)
     iterations = 100 if args.quick else 600
     info = device_info()
     print(f"device: {describe(info)}, jax {info['jax']}", flush=True)
-    prob, lo, hi, true = problem()
+    prob, lo, hi, true = rs010n_problem()
     rows = []
     dtypes = (jnp.float64,) if args.quick else (jnp.float64, jnp.float32)
     paper = {"SEDSABSO": sj.SEDSABSO.paper(), "BSO": sj.BSO.paper(), "LDWPSO": sj.LDWPSO.paper()}
@@ -226,7 +223,8 @@ def main():
         try:
             rows.append(make())
         except ImportError:
-            print(f"{label} not installed: pip install -e '.[bench]' (mealpy: see peers.py)")
+            print(f"{label} not installed: pip install -e '.[bench]' "
+                  "(mealpy: see benchmarks/peers.py)")
     floor = next(r["fitness_mean"] for r in rows if r["method"] == "L1-LP")
     counts = [int(k) for k in args.runs_per_call.split(",") if k.strip()]
     many = runs_per_call(prob, lo, hi, iterations, dtypes, counts) if counts else []

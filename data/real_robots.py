@@ -1,7 +1,8 @@
 """The real-robot recordings kept in this folder (not installed with the package), as the
 package reads them: converters from the sources' own layouts to measurement files, and the
-settings each needs. Used by the tests and the benchmarks; each folder's SOURCE.md gives
-origin, licence and format.
+settings each needs. Used by the tests and the benchmarks (``from data import
+real_robots`` from the repository root); each folder's SOURCE.md gives origin, licence
+and format.
 
     python data/real_robots.py OUT_DIR     # writes franka_panda.npz, staubli_tx40.npz
 """
@@ -35,10 +36,9 @@ def tx40_joint_side(tmp) -> tuple:
     """The TX40 run on the joint side at 1 kHz (every 5th sample) and its transmission:
     ``(measurements, Transmission)``; the motor-side file is written under ``tmp``."""
     import sedsabso_jax as sj
-    from sedsabso_jax.measurements.transmission import Transmission
 
-    tr = Transmission.from_gear_ratios(TX40_GEAR_RATIOS, coupling=TX40_COUPLING,
-                                       offset=TX40_OFFSET)
+    tr = sj.Transmission.from_gear_ratios(TX40_GEAR_RATIOS, coupling=TX40_COUPLING,
+                                          offset=TX40_OFFSET)
     motor = sj.load_measurements(tx40_npz(Path(tmp) / "tx40.npz"), n_joints=6, downsample=5)
     return tr.to_joint_side(motor), tr
 

@@ -13,9 +13,13 @@ RS010N's Eq. 17 sizes: 21 base parameters, 3000 residual rows):
   antenna terms from one pass over ``r = W x - tau``, or ``f`` fused on its own;
 - one iteration's draws ``r1, r2`` (2 x 50 x 21) from JAX's ``jax.random.uniform`` (a
   5-trip loop on the CPU) and from the package's written-out threefry
-  (:func:`~sedsabso_jax.optim.swarm.uniforms`), both bit for bit the same numbers.
+  (:func:`~sedsabso_jax.optim._swarm.uniforms`), both bit for bit the same numbers.
 
-    python benchmarks/kernels.py [--repeats 15] [--json out.json]
+    python -m tools.kernels [--repeats 15] [--json out.json]
+
+A developer tool, not a benchmark of the public API: it times the implementation's own
+private kernels (``sedsabso_jax.optim._fitness``, ``_swarm``), so it follows them when
+they change. Results: ``benchmarks/results/kernels_*.json``.
 
 The machine is shared and its state changes the picture: products parallelise over both
 cores when the machine is quiet; compare rows of one run only.
@@ -30,11 +34,10 @@ import time
 import jax
 import jax.numpy as jnp
 import numpy as np
-from device import describe, device_info
 
-import sedsabso_jax as sj  # noqa: F401  (float64 on)
-from sedsabso_jax.optim.fitness import _antenna_terms, _matmul
-from sedsabso_jax.optim.swarm import uniforms
+from benchmarks.device import describe, device_info
+from sedsabso_jax.optim._fitness import _antenna_terms, _matmul
+from sedsabso_jax.optim._swarm import uniforms
 
 M, D, LENGTH = 3000, 21, 300
 
@@ -81,6 +84,7 @@ def main():
     parser.add_argument("--repeats", type=int, default=15)
     parser.add_argument("--json", default=None)
     args = parser.parse_args()
+    jax.config.update("jax_enable_x64", True)
     rng = np.random.default_rng(0)
     info = device_info()
     cases = []
