@@ -7,9 +7,13 @@ import functools
 import importlib
 import sys
 import warnings
+from collections.abc import Callable
 from types import FrameType
+from typing import Any, TypeVar
 
 _INTERNAL = ("sedsabso_jax", "equinox")
+
+_T = TypeVar("_T")
 
 
 def caller_stacklevel() -> int:
@@ -29,13 +33,13 @@ def warn(old: str, new: str) -> None:
                   DeprecationWarning, stacklevel=caller_stacklevel())
 
 
-def renamed_arguments(cls, renamed: dict[str, str]):
+def renamed_arguments(cls: type[_T], renamed: dict[str, str]) -> type[_T]:
     """Let ``cls(old=...)`` stand for ``cls(new=...)`` for each ``old: new``, with a
     warning. Passing both is a TypeError."""
     init = cls.__init__
 
     @functools.wraps(init)
-    def __init__(self, *args, **kwargs):
+    def __init__(self: Any, *args: Any, **kwargs: Any) -> None:
         for old, new in renamed.items():
             if old in kwargs:
                 if new in kwargs:
@@ -44,11 +48,11 @@ def renamed_arguments(cls, renamed: dict[str, str]):
                 kwargs[new] = kwargs.pop(old)
         init(self, *args, **kwargs)
 
-    cls.__init__ = __init__
+    cls.__init__ = __init__  # type: ignore[method-assign]
     return cls
 
 
-def resolve(path: str):
+def resolve(path: str) -> Any:
     """The object at the dotted ``path`` (``"sedsabso_jax.robots.rs010n"``): the longest
     importable module prefix, then attributes."""
     parts = path.split(".")
@@ -64,12 +68,12 @@ def resolve(path: str):
 
 
 def moved(module_name: str, names: dict[str, str | tuple[str, str]],
-          module: str | None = None):
+          module: str | None = None) -> Callable[[str], Any]:
     """A module ``__getattr__`` for names that moved: each ``old: "new.dotted.path"`` is
     served from its new place with a warning naming it (``old: (path, advice)``: the
     warning gives the advice instead). With ``module`` (a deprecated module path kept as
     a shim), any other name is looked up there, with a warning."""
-    def __getattr__(name: str):
+    def __getattr__(name: str) -> Any:
         if name in names:
             where = names[name]
             path, advice = (where, where) if isinstance(where, str) else where

@@ -15,12 +15,18 @@ import os
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
-from typing import BinaryIO
+from typing import TYPE_CHECKING, Any, BinaryIO
 
 import numpy as np
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
-def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
+#: A file path: a string or a path object.
+PathLike = str | os.PathLike[str]
+
+
+def atomic_write(path: PathLike, write: Callable[[BinaryIO], None]) -> Path:
     """Call ``write(f)`` on a binary file object opened on a temporary file beside
     ``path``; flush and fsync it, give it the permissions of the file it replaces (0644
     for a new one), then move it over ``path``. On any failure the temporary file is
@@ -45,7 +51,7 @@ def atomic_write(path, write: Callable[[BinaryIO], None]) -> Path:
     return path
 
 
-def write_text(path, text: str) -> Path:
+def write_text(path: PathLike, text: str) -> Path:
     """Write ``text`` (UTF-8) to ``path`` atomically."""
     def write(f: BinaryIO) -> None:
         f.write(text.encode("utf-8"))
@@ -53,7 +59,7 @@ def write_text(path, text: str) -> Path:
     return atomic_write(path, write)
 
 
-def jsonable(value):
+def jsonable(value: Any) -> Any:
     """``value`` as plain JSON values: dicts (keys as strings), lists, str, bool, int,
     float and None. numpy and JAX arrays become (nested) lists, their scalars Python
     numbers; NaN and +-Inf become None (JSON has no such numbers). Anything else is a
@@ -77,12 +83,12 @@ def jsonable(value):
     raise TypeError(f"cannot convert {type(value).__name__} to JSON: {value!r}")
 
 
-def to_json(value) -> str:
+def to_json(value: Any) -> str:
     """Indented JSON text of :func:`jsonable` ``(value)``, with a final newline."""
     return json.dumps(jsonable(value), indent=2, allow_nan=False) + "\n"
 
 
-def write_json(path, value) -> Path:
+def write_json(path: PathLike, value: Any) -> Path:
     """Write :func:`to_json` ``(value)`` to ``path`` atomically."""
     return write_text(path, to_json(value))
 
@@ -95,7 +101,7 @@ def markdown_table(head: list[str], rows: list[list[str]]) -> str:
                       *(fmt(r) for r in rows)])
 
 
-def pyplot():
+def pyplot() -> Any:
     """``matplotlib.pyplot`` on the non-interactive Agg backend unless one is chosen
     already (imported here: most runs draw nothing)."""
     import matplotlib
@@ -106,7 +112,7 @@ def pyplot():
     return plt
 
 
-def save_figure(fig, path) -> None:
+def save_figure(fig: Figure, path: PathLike) -> None:
     """Save ``fig`` as PNG atomically and close it."""
     try:
         atomic_write(path, lambda f: fig.savefig(f, format="png", dpi=120))

@@ -8,6 +8,8 @@ application, turns the mode on for itself."""
 from __future__ import annotations
 
 import jax
+import numpy as np
+from jax.typing import DTypeLike
 
 #: What to do, in one line.
 HOW = ("call jax.config.update('jax_enable_x64', True) at the start of the program, before "
@@ -29,7 +31,7 @@ def require(what: str) -> None:
         raise Float64Required(f"{what} needs float64, and JAX's 64-bit mode is off: {HOW}")
 
 
-def float_dtype(dtype=None):
+def float_dtype(dtype: DTypeLike | None = None) -> np.dtype:
     """``dtype`` as float32 or float64 (None: float64 in JAX's 64-bit mode, else
     float32); float64 while the mode is off is an error saying how to turn it on."""
     import jax.numpy as jnp

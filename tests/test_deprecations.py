@@ -102,10 +102,15 @@ def test_validation_keyword_forms(recording):
 
 
 @pytest.mark.parametrize("module, old, new", [
-    ("sedsabso_jax.excitation", "search_box", "coefficient_box"),
-    ("sedsabso_jax.dynamics._robots", "KUKA_LWR4_URDF", "kuka_lwr4_urdf"),
-    ("sedsabso_jax.dynamics._robots", "RS010N_TABLE2", None),
-    ("sedsabso_jax.identification", "Model", "TorqueModel"),
+    ("sedsabso_jax.excitation", "search_box", lambda: sj.excitation.coefficient_box),
+    ("sedsabso_jax.robots", "KUKA_LWR4_URDF", lambda: sj.robots.kuka_lwr4_urdf),
+    ("sedsabso_jax.robots", "RS010N_TABLE2", lambda: sj.paper.TABLE2),
+    ("sedsabso_jax.identification", "Model", lambda: sj.TorqueModel),
+    ("sedsabso_jax.optim", "minimise", lambda: sj.minimise),
+    ("sedsabso_jax.dynamics", "robots", lambda: sj.robots),
+    ("sedsabso_jax", "metrics", lambda: sj.identification._metrics),
+    ("sedsabso_jax.measurements.transmission", "Transmission", lambda: sj.Transmission),
+    ("sedsabso_jax.reproduce.experiment", "run", lambda: sj.reproduce.run),
 ])
 def test_moved_module_names(module, old, new):
     import importlib
@@ -113,6 +118,6 @@ def test_moved_module_names(module, old, new):
     mod = importlib.import_module(module)
     with pytest.deprecated_call(match=f"{module}.{old} is deprecated"):
         value = getattr(mod, old)
-    assert value is (getattr(mod, new) if new else sj.paper.TABLE2)
+    assert value is new()
     with pytest.raises(AttributeError, match="has no attribute 'no_such_name'"):
         mod.no_such_name  # noqa: B018

@@ -204,7 +204,7 @@ REPO = ROOT.parent
 
 def _private_uses(source: str) -> list[str]:
     """``sedsabso_jax`` imports or attribute paths through a private name."""
-    found = re.findall(r"(?:sedsabso_jax|\bsj)(?:\.\w+)*\._\w+", source)
+    found = re.findall(r"(?:sedsabso_jax|\bsj)(?:\.\w+)*\._(?!_)\w+", source)
     for m in re.finditer(r"from (sedsabso_jax[\w.]*) import \(?([^)\n]*)", source):
         found += [f"{m.group(1)}.{n.split()[0]}" for n in m.group(2).split(",")
                   if n.strip().startswith("_")]

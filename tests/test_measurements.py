@@ -89,7 +89,7 @@ def test_torque_limits_match_the_urdf():
     efforts = [float(j.find("limit").get("effort")) for j in root.iter("joint")
                if j.get("type") in ("revolute", "prismatic")]
     assert tuple(efforts) == KUKA_LWR4_TORQUE_LIMITS
-    limits = sj.dynamics.limits.joint_limits("kuka_lwr4", sj.robots.kuka_lwr4())
+    limits = sj.dynamics.joint_limits("kuka_lwr4", sj.robots.kuka_lwr4())
     assert tuple(limits.torque_limits) == KUKA_LWR4_TORQUE_LIMITS
     assert sj.JointLimits.rs010n().torque_limits is None  # Table 3 gives no efforts
 

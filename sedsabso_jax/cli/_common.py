@@ -7,12 +7,16 @@ import argparse
 import os
 import sys
 import time
+from collections.abc import Callable
+from typing import TextIO
+
+from .._output import PathLike
 
 
 class Progress:
     """A one-line progress bar on stderr, shown only when stderr is a terminal."""
 
-    def __init__(self, stream=None, width: int = 24):
+    def __init__(self, stream: TextIO | None = None, width: int = 24):
         self.stream = stream or sys.stderr
         self.show = self.stream.isatty()
         self.width = width
@@ -30,13 +34,14 @@ class Progress:
         self.stream.flush()
 
 
-def number(kind: type, minimum: float, strict: bool):
+def number(kind: type[int] | type[float], minimum: float, strict: bool
+           ) -> Callable[[str], float]:
     """An argparse type: ``kind`` (int or float), finite, ``> minimum`` if ``strict`` else
     ``>= minimum``; a bad value gets one line saying what was expected."""
     what = "an integer" if kind is int else "a finite number"
     expected = f"expected {what} {'>' if strict else '>='} {minimum:g}"
 
-    def parse(text: str):
+    def parse(text: str) -> float:
         try:
             value = kind(text)
         except ValueError:
@@ -55,7 +60,8 @@ positive_float = number(float, 0, strict=True)
 non_negative_float = number(float, 0, strict=False)
 
 
-def check_writable(out_dir, json_path, urdf_path=None) -> None:
+def check_writable(out_dir: PathLike | None, json_path: PathLike | None,
+                   urdf_path: PathLike | None = None) -> None:
     """Fail before the (long) run, not after it, when an output cannot be written."""
     for flag, path in (("--out", out_dir), ("--json", json_path), ("--urdf-out", urdf_path)):
         if path is None:

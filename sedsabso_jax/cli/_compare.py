@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import os
 import time
 
@@ -23,11 +24,11 @@ class CompareProgress(Progress):
                   flush=True)
 
 
-def run(args) -> None:
+def run(args: argparse.Namespace) -> None:
     from ..compare import _report as report
     from ..compare import _run as compare
 
-    def names(text):
+    def names(text: str) -> tuple[str, ...]:
         return tuple(v.strip() for v in text.split(",") if v.strip())
 
     try:
@@ -55,7 +56,8 @@ def run(args) -> None:
           + ", ".join(written))
 
 
-def add_parser(sub, parents) -> None:
+def add_parser(sub: argparse._SubParsersAction, parents: list[argparse.ArgumentParser]
+               ) -> None:
     """The ``compare`` subcommand's flags (its defaults are ``compare``'s own)."""
     from ..compare._run import DEFAULT_ALGORITHMS, DEFAULT_BUDGET
 

@@ -77,7 +77,7 @@ def _prior_strength(text: str):
     return value
 
 
-def run(args) -> None:
+def run(args: argparse.Namespace) -> None:
     """The subcommand: check the flags, load, build the objects, one call, print, write."""
     from ..dynamics import _robots as robots
     from ..dynamics._limits import joint_limits
@@ -131,7 +131,8 @@ def run(args) -> None:
         print("written: " + ", ".join(written))
 
 
-def add_parser(sub, parents) -> None:
+def add_parser(sub: argparse._SubParsersAction, parents: list[argparse.ArgumentParser]
+               ) -> None:
     """The ``identify`` subcommand's flags."""
     from ..identification._fitting import Estimator
     from ..identification._model import FRICTION_TERMS

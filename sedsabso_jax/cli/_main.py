@@ -19,6 +19,7 @@ import argparse
 import os
 import sys
 import warnings
+from typing import NoReturn
 
 from . import _compare as compare_command
 from . import _identify as identify_command
@@ -59,7 +60,7 @@ def _cmd_reproduce(args) -> None:
 class _Parser(argparse.ArgumentParser):
     """argparse with usage errors as ONE line on stderr (exit status 2)."""
 
-    def error(self, message: str):
+    def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 

@@ -26,10 +26,13 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from collections.abc import Callable, Iterable
+from typing import Any
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Array, ArrayLike, Float
 
 from ..dynamics._robots import kuka_lwr4
 from ..identification._identify import prepare, swarm_box
@@ -63,10 +66,10 @@ GALLAGHER = {20: (101, 1000.0, 5.0, 1.0), 21: (21, 1000.0 ** 2, 4.9, 3.92 / 4.0)
 def _branches():
     from evosax.problems.bbob.bbob_fns import bbob_fns
 
-    def evosax_branch(fn):
+    def evosax_branch(fn: Callable[..., Any]) -> Callable[..., Any]:
         return lambda x, x_opt, R, Q, peaks: fn(x, x_opt, R, Q, x.shape[0])
 
-    def gallagher_branch(which):
+    def gallagher_branch(which: int) -> Callable[..., Any]:
         return lambda x, x_opt, R, Q, peaks: _gallagher(x, R, *peaks[which])
 
     out = [evosax_branch(bbob_fns[name]) for name in bbob_functions()]
@@ -75,7 +78,7 @@ def _branches():
     return tuple(out)
 
 
-def bbob_value(x, args):
+def bbob_value(x: Float[Array, " d"], args: tuple[Any, ...]) -> Float[Array, ""]:
     """BBOB function ``args[0]`` (0-based: f1 is 0) of instance ``args[1:]`` at ``x``:
     the function, its boundary penalty and ``f_opt``."""
     fid, x_opt, f_opt, R, Q, peaks = args
@@ -83,7 +86,10 @@ def bbob_value(x, args):
     return value + penalty + f_opt
 
 
-def gallagher_peaks(index: int, x_opt, R, Q):
+def gallagher_peaks(index: int, x_opt: Float[ArrayLike, " d"], R: Float[ArrayLike, "d d"],
+                    Q: Float[Array, "d d"]
+                    ) -> tuple[Float[Array, "peaks d"], Float[Array, "peaks d"],
+                               Float[Array, " peaks"]]:
     """The peaks of evosax's Gallagher function ``index`` (20: f21, 21: f22) of one
     instance: ``(R y_i, the diagonal of C_i, w_i)`` per peak, drawn as evosax draws them
     (Hansen et al. 2009, p. 13). evosax draws them, and multiplies three d x d matrices per
@@ -132,7 +138,7 @@ class Instance:
     f_opt: float
     scale: float  # precision = (f - f_opt) / scale
 
-    def precision(self, f):
+    def precision(self, f: Float[ArrayLike, "*shape"]) -> Float[np.ndarray, "*shape"]:
         return (np.asarray(f, dtype=float) - self.f_opt) / self.scale
 
 
@@ -225,7 +231,7 @@ def identification_problem(name: str) -> Problem:
                      f"{IDENTIFICATION}")
 
 
-def problem_names(suite: str, dimensions=BBOB_DIMENSIONS) -> list[str]:
+def problem_names(suite: str, dimensions: Iterable[int] = BBOB_DIMENSIONS) -> list[str]:
     """The problems of ``suite`` (``bbob``, ``identification`` or ``all``), in run order."""
     if suite not in SUITES:
         raise ValueError(f"unknown suite {suite!r}; expected one of {', '.join(SUITES)}")

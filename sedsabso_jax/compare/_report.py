@@ -10,12 +10,16 @@ over all pairs of algorithms of that problem (:mod:`._statistics`).
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
 
 import jax
 import numpy as np
 
-from .._output import markdown_table, pyplot, save_figure, to_json, write_text
+from .._output import PathLike, markdown_table, pyplot, save_figure, to_json, write_text
 from ._statistics import ALPHA, ecdf, effect_size_label, pairwise, summary
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def _array(values) -> np.ndarray:
@@ -139,7 +143,7 @@ def render(docs: list[dict], settings: dict, seconds: float | None = None) -> tu
     return "\n".join(lines), summary_doc
 
 
-def ecdf_figure(docs: list[dict], title: str):
+def ecdf_figure(docs: list[dict], title: str) -> Figure:
     """One ECDF of run lengths per algorithm over every (problem, run, target) of
     ``docs`` (of one dimension each, as COCO aggregates)."""
     plt = pyplot()
@@ -181,7 +185,8 @@ def figures(docs: list[dict]) -> dict:
     return out
 
 
-def write_report(docs: list[dict], settings: dict, out_dir, seconds=None) -> list[str]:
+def write_report(docs: list[dict], settings: dict, out_dir: PathLike,
+                 seconds: float | None = None) -> list[str]:
     """Render everything, then write report.md, summary.json and the figures."""
     text, summary_doc = render(docs, settings, seconds)
     summary_text = to_json(summary_doc)

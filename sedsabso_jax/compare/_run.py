@@ -21,18 +21,19 @@ import os
 import re
 import time
 import zlib
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 import jax
 import numpy as np
 
-from .._output import jsonable, write_text
+from .._output import PathLike, jsonable, write_text
 from .._version import __version__
 from ..optim._budget import evaluation_counts, iterations_for_budget
 from ..optim._driver import minimise
 from ..optim._external import Evosax, evosax_names
 from ..optim._fitness import BlackBox
 from ..optim._registry import SWARMS
+from ..optim._solver import AbstractSolver
 from . import _problems as P
 from ._statistics import run_lengths
 
@@ -96,7 +97,7 @@ class Settings:
             raise ValueError(f"dtype must be float32 or float64, got {self.dtype!r}")
 
 
-def parse_budget(text) -> tuple[int, bool]:
+def parse_budget(text: str | int) -> tuple[int, bool]:
     """``"20000"`` -> (20000, False): evaluations in all; ``"1000d"`` -> (1000, True): per
     dimension of the problem."""
     m = re.fullmatch(r"\s*([0-9]+)\s*(d?)\s*", str(text))
@@ -106,7 +107,7 @@ def parse_budget(text) -> tuple[int, bool]:
     return int(m.group(1)), bool(m.group(2))
 
 
-def solver_for(name: str):
+def solver_for(name: str) -> AbstractSolver:
     """The solver called ``name``: a swarm of the paper (its Sec. 5.2 settings) or an
     evosax strategy (its own defaults; ``evosax:NAME`` also works)."""
     if name in SWARMS:
@@ -131,7 +132,7 @@ def label(name: str) -> str:
     return solver_for(name).label
 
 
-def check_dimensions(settings: Settings, dims) -> None:
+def check_dimensions(settings: Settings, dims: Iterable[int]) -> None:
     """Every algorithm can run in every dimension within the budget: one generation fits
     and a run of two iterations traces (nothing is compiled). Raises ValueError naming
     the algorithm and the dimension."""
@@ -221,11 +222,11 @@ def _settings_doc(settings: Settings) -> dict:
     return jsonable({**doc, "version": __version__})
 
 
-def problem_path(out_dir, name: str) -> str:
+def problem_path(out_dir: PathLike, name: str) -> str:
     return os.path.join(out_dir, "problems", f"{name}.json")
 
 
-def load_finished(path, settings: Settings) -> dict | None:
+def load_finished(path: PathLike, settings: Settings) -> dict | None:
     """A problem's document if its file exists with these settings; None if it does not
     exist. Raises ValueError when it holds other settings or cannot be read."""
     if not os.path.exists(path):
@@ -245,7 +246,7 @@ def load_finished(path, settings: Settings) -> dict | None:
     return doc
 
 
-def compare(settings: Settings, out_dir,
+def compare(settings: Settings, out_dir: PathLike,
             progress: Callable[[str, int, int, float], None] | None = None) -> list[dict]:
     """Run (or read back) every problem of the suite; returns their documents."""
     settings.check()

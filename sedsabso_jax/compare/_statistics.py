@@ -17,14 +17,16 @@ is better), as reviewers of optimisation papers expect them.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Sequence
 
 import numpy as np
 import scipy.stats
+from jaxtyping import ArrayLike, Float
 
 ALPHA = 0.05
 
 
-def summary(values) -> dict:
+def summary(values: Float[ArrayLike, " runs"] | Sequence[float]) -> dict:
     """Median, quartiles and IQR of ``values`` (non-finite values sort last)."""
     v = np.asarray(values, dtype=float)
     v = np.where(np.isnan(v), np.inf, v)
@@ -35,7 +37,8 @@ def summary(values) -> dict:
             "runs": int(v.size)}
 
 
-def a12(a, b) -> float:
+def a12(a: Float[ArrayLike, " runs_a"] | Sequence[float],
+        b: Float[ArrayLike, " runs_b"] | Sequence[float]) -> float:
     """Vargha-Delaney A12: ``P(a < b) + P(a == b) / 2`` over all pairs of a run of ``a``
     and a run of ``b`` (minimisation: above 0.5 means ``a`` tends to end lower)."""
     a, b = np.asarray(a, dtype=float).ravel(), np.asarray(b, dtype=float).ravel()
@@ -44,7 +47,7 @@ def a12(a, b) -> float:
     return float((r_a - a.size * (a.size + 1) / 2) / (a.size * b.size))
 
 
-def holm(p_values) -> np.ndarray:
+def holm(p_values: Float[ArrayLike, " m"] | Sequence[float]) -> Float[np.ndarray, " m"]:
     """Holm's step-down adjusted p-values (reject where adjusted p <= alpha); they control
     the family-wise error rate over the family of tests given."""
     p = np.asarray(p_values, dtype=float)
@@ -89,7 +92,10 @@ def effect_size_label(a: float) -> str:
             "medium" if d < 0.21 else "large")
 
 
-def run_lengths(precision_history, evaluations, targets) -> np.ndarray:
+def run_lengths(precision_history: Float[ArrayLike, "runs iterations"],
+                evaluations: Float[ArrayLike, " iterations"],
+                targets: Float[np.ndarray, " targets"] | Sequence[float]
+                ) -> Float[np.ndarray, "runs targets"]:
     """Evaluations each run needs to reach each target: ``precision_history (runs,
     iterations)`` the best precision after each iteration, ``evaluations (iterations,)``
     the cumulative evaluations then; returns ``(runs, targets)``, ``inf`` where a target
@@ -104,7 +110,8 @@ def run_lengths(precision_history, evaluations, targets) -> np.ndarray:
     return out
 
 
-def ecdf(run_lengths_, grid) -> np.ndarray:
+def ecdf(run_lengths_: Float[ArrayLike, "*shape"], grid: Float[ArrayLike, " g"]
+         ) -> Float[np.ndarray, " g"]:
     """Share of (run, target) pairs reached within each evaluation count of ``grid``."""
     r = np.asarray(run_lengths_, dtype=float).ravel()
     return np.array([np.mean(r <= g) for g in np.asarray(grid, dtype=float)])

@@ -11,12 +11,15 @@ the usual regrouped names (Khalil & Dombre 2002, Sec. 10.3): ``ZZ1R = ZZ1 + YY2 
 
 from __future__ import annotations
 
+from typing import Any
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 import scipy.linalg
-from jaxtyping import Array, Float
+from jax.typing import DTypeLike
+from jaxtyping import Array, ArrayLike, Float
 
 from ._regressor import regressor as _full_regressor
 from ._robot import Robot
@@ -49,7 +52,7 @@ class BaseParameters(eqx.Module):
         return len(self.indices)
 
     @property
-    def symbolic(self):
+    def symbolic(self) -> tuple[Any, ...]:
         """The expressions as sympy objects, exact decimal coefficients."""
         import sympy
 
@@ -61,7 +64,7 @@ class BaseParameters(eqx.Module):
             for row in K
         )
 
-    def project(self, params) -> Float[Array, "... rank"]:
+    def project(self, params: Float[ArrayLike, "*batch p"]) -> Float[Array, "... rank"]:
         """Full parameters ``(..., 12 n)`` -> base parameters ``(..., rank)``."""
         params = jnp.asarray(params, dtype=self.matrix.dtype)
         if params.ndim == 0 or params.shape[-1] != self.robot.n_params:
@@ -71,7 +74,8 @@ class BaseParameters(eqx.Module):
             )
         return jnp.matmul(params, self.matrix.T, precision=jax.lax.Precision.HIGHEST)
 
-    def regressor(self, q, qd, qdd, *, dtype=jnp.float64,
+    def regressor(self, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
+                  qdd: Float[ArrayLike, "*batch n"], *, dtype: DTypeLike = jnp.float64,
                   memory_budget: int | None = None) -> Float[Array, "... n rank"]:
         """Base regressor ``(..., n) -> (..., n, rank)``: the kept columns of ``Y``
         (``memory_budget``: see :func:`~sedsabso_jax.regressor`)."""
@@ -87,7 +91,9 @@ class BaseParameters(eqx.Module):
         return f"BaseParameters({self.robot.name!r}, rank={self.rank} of {self.robot.n_params})"
 
 
-def random_states(robot: Robot, n_samples: int, seed: int = 0):
+def random_states(robot: Robot, n_samples: int, seed: int = 0
+                  ) -> tuple[Float[np.ndarray, "samples n"], Float[np.ndarray, "samples n"],
+                             Float[np.ndarray, "samples n"]]:
     """Random (q, qd, qdd), each (n_samples, n): q uniform on [-pi, pi] (revolute) or
     [-1, 1] m (prismatic), qd and qdd standard normal."""
     rng = np.random.default_rng(seed)

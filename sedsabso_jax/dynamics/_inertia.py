@@ -8,7 +8,10 @@ float64: used when robots are built and when fits are checked.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 
 def inertia_vector(I: np.ndarray) -> np.ndarray:
@@ -16,13 +19,14 @@ def inertia_vector(I: np.ndarray) -> np.ndarray:
     return np.array([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]])
 
 
-def inertia_matrix(v) -> np.ndarray:
+def inertia_matrix(v: Float[np.ndarray, " 6"] | Sequence[float]) -> Float[np.ndarray, "3 3"]:
     """The symmetric 3x3 tensor of ``[Ixx Iyy Izz Ixy Ixz Iyz]``."""
     xx, yy, zz, xy, xz, yz = v
     return np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
 
 
-def params_from_com(mass: float, com, inertia_com: np.ndarray) -> np.ndarray:
+def params_from_com(mass: float, com: Float[ArrayLike, " 3"] | Sequence[float],
+                    inertia_com: np.ndarray) -> Float[np.ndarray, " 10"]:
     """10 inertial parameters from mass, centre of mass and inertia about the CoM.
 
     All in one frame; the inertia about the origin follows from the parallel-axis theorem
@@ -54,7 +58,7 @@ def transform_params(T: np.ndarray, params10: np.ndarray) -> np.ndarray:
     return np.concatenate([inertia_vector(I_a), [m], h_r + m * p])
 
 
-def pseudo_inertia(params10) -> np.ndarray:
+def pseudo_inertia(params10: Float[ArrayLike, "*batch 10"]) -> Float[np.ndarray, "*batch 4 4"]:
     """``(..., 10)`` link parameters -> ``(..., 4, 4)`` pseudo-inertia matrices
     ``J = [[tr(I)/2 1 - I, h], [h^T, m]]`` (Wensing, Kim & Slotine, "Linear matrix
     inequalities for physically consistent inertial parameter identification", IEEE RA-L
@@ -71,7 +75,7 @@ def pseudo_inertia(params10) -> np.ndarray:
     return J
 
 
-def from_pseudo_inertia(J) -> np.ndarray:
+def from_pseudo_inertia(J: Float[ArrayLike, "*batch 4 4"]) -> Float[np.ndarray, "*batch 10"]:
     """``(..., 4, 4)`` pseudo-inertia -> ``(..., 10)`` link parameters (the inverse of
     :func:`pseudo_inertia`)."""
     J = np.asarray(J, dtype=float)
@@ -81,7 +85,7 @@ def from_pseudo_inertia(J) -> np.ndarray:
                      I[..., 1, 2], J[..., 3, 3], J[..., 0, 3], J[..., 1, 3], J[..., 2, 3]], -1)
 
 
-def is_physically_consistent(params, margin: float = 0.0) -> bool:
+def is_physically_consistent(params: Float[ArrayLike, " p"], margin: float = 0.0) -> bool:
     """Whether every link of a full parameter vector (12 per link, the robot's order) has
     a pseudo-inertia with eigenvalues > ``margin``: positive mass, a positive-definite
     inertia satisfying the triangle inequalities, the centre of mass inside the body."""

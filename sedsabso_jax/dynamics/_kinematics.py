@@ -5,30 +5,34 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
-from jaxtyping import Array, Float
+from jaxtyping import Array, ArrayLike, Float
 
 from ._robot import Robot, joint_arrays
 
 
-def cross(a, b):
+def cross(a: Float[Array, "*batch 3"], b: Float[Array, "*batch 3"]
+          ) -> Float[Array, "*batch 3"]:
     """Cross product over the last axis, written out so XLA fuses it."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
     return jnp.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
-def rotate(R, x):
+def rotate(R: Float[Array, "*batch 3 3"], x: Float[Array, "*batch 3"]
+           ) -> Float[Array, "*batch 3"]:
     """R x over the last axes: R (..., 3, 3), x (..., 3). Small products are written as
     multiply-and-sum, which XLA fuses, rather than as many tiny ``dot`` calls."""
     return jnp.sum(R * x[..., None, :], axis=-1)
 
 
-def rotate_back(R, x):
+def rotate_back(R: Float[Array, "*batch 3 3"], x: Float[Array, "*batch 3"]
+                ) -> Float[Array, "*batch 3"]:
     """R^T x over the last axes."""
     return jnp.sum(R * x[..., :, None], axis=-2)
 
 
-def joint_transforms(robot: Robot, q):
+def joint_transforms(robot: Robot, q: Float[Array, "*batch n"]
+                     ) -> tuple[Float[Array, "*batch n 3 3"], Float[Array, "*batch n 3"]]:
     """Every link's pose in its parent's frame, ``T_fixed @ exp([screw] q)``.
 
     Returns R (..., n, 3, 3) and p (..., n, 3). ``exp`` by Lynch & Park 2017, Prop. 3.25:
@@ -49,7 +53,8 @@ def joint_transforms(robot: Robot, q):
     return jnp.sum(Rf[:, :, :, None] * Rm[..., None, :, :], -2), rotate(Rf, pm) + pf
 
 
-def link_poses(robot: Robot, q):
+def link_poses(robot: Robot, q: Float[Array, "*batch n"]
+               ) -> tuple[Float[Array, "*batch n 3 3"], Float[Array, "*batch n 3"]]:
     """Every link frame in the base frame: R0 (..., n, 3, 3), p0 (..., n, 3)."""
     R, p = joint_transforms(robot, q)
     Rs, ps = [R[..., 0, :, :]], [p[..., 0, :]]
@@ -67,7 +72,8 @@ def _forward_kinematics(robot: Robot, q):
     return jnp.concatenate([top, bottom], axis=-2)
 
 
-def forward_kinematics(robot: Robot, q) -> Float[Array, "... n 4 4"]:
+def forward_kinematics(robot: Robot, q: Float[ArrayLike, "*batch n"]
+                       ) -> Float[Array, "... n 4 4"]:
     """Pose of every link frame in the base frame: ``(..., n) -> (..., n, 4, 4)``."""
     (q,) = joint_arrays(robot, ("q", q))
     return _forward_kinematics(robot, q)

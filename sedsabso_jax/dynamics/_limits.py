@@ -5,16 +5,22 @@ from __future__ import annotations
 
 import contextlib
 import math
+from collections.abc import Sequence
+from typing import TypeAlias
 
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float
+from jaxtyping import Array, ArrayLike, Float
 
+from .._output import PathLike
 from ..paper import TABLE3_DEG
 from ._robot import Robot
 from ._robots import kuka_lwr4_urdf, staubli_tx40_urdf
 from ._urdf import joint_limit_rows
+
+#: One limit per joint.
+_PerJoint: TypeAlias = Float[ArrayLike, " n"] | Sequence[float]
 
 
 class JointLimits(eqx.Module):
@@ -31,8 +37,9 @@ class JointLimits(eqx.Module):
     names: tuple[str, ...] = eqx.field(static=True)
     angular: tuple[bool, ...] = eqx.field(static=True)
 
-    def __init__(self, q_min, q_max, qd_max, qdd_max=None, tau_max=None, *, names=None,
-                 angular=None):
+    def __init__(self, q_min: _PerJoint, q_max: _PerJoint, qd_max: _PerJoint,
+                 qdd_max: _PerJoint | None = None, tau_max: _PerJoint | None = None, *,
+                 names: Sequence[str] | None = None, angular: Sequence[bool] | None = None):
         q_min = np.asarray(q_min, dtype=float)
         n = q_min.shape[0] if q_min.ndim == 1 else None
         if n is None or n < 1:
@@ -99,7 +106,8 @@ class JointLimits(eqx.Module):
         return f"JointLimits({self.n_joints} joints: {', '.join(self.names)})"
 
 
-def joint_limits_from_urdf(path, robot: Robot, *, qdd_max=None) -> JointLimits:
+def joint_limits_from_urdf(path: PathLike, robot: Robot, *,
+                          qdd_max: Float[ArrayLike, ""] | _PerJoint | None = None) -> JointLimits:
     """Limits of ``robot``'s joints from the ``<limit>`` tags of its URDF: ``lower,
     upper`` (a continuous joint or one without ``<limit>``: unbounded), ``velocity``
     (missing or 0: unbounded) and ``effort`` as ``tau_max`` (missing or 0: nan). URDF has
@@ -136,7 +144,9 @@ def joint_limits(spec: str, robot: Robot) -> JointLimits:
     if spec == "rs010n":
         return JointLimits.rs010n()
     if spec == "franka_panda":
-        return JointLimits(**FRANKA_PANDA_LIMITS, names=robot.joint_names)
+        # mypy sees one value type for every key of the dict, angular's included
+        return JointLimits(**FRANKA_PANDA_LIMITS,  # type: ignore[arg-type]
+                           names=robot.joint_names)
     urdf = {"kuka_lwr4": kuka_lwr4_urdf, "staubli_tx40": staubli_tx40_urdf}.get(spec)
     with urdf() if urdf else contextlib.nullcontext(spec) as path:
         return joint_limits_from_urdf(path, robot)

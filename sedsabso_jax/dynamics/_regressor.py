@@ -36,7 +36,8 @@ from functools import partial
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float
+from jax.typing import DTypeLike
+from jaxtyping import Array, ArrayLike, Float
 
 from ._kinematics import cross, link_poses, rotate, rotate_back
 from ._robot import Robot, joint_arrays
@@ -47,7 +48,7 @@ DEFAULT_MEMORY_BUDGET = 2**30
 MIN_MEMORY_BUDGET = 10**6
 
 
-def check_memory_budget(memory_budget) -> int:
+def check_memory_budget(memory_budget: object) -> int:
     """``memory_budget`` in bytes (None: :data:`DEFAULT_MEMORY_BUDGET`); ValueError unless
     an integer >= :data:`MIN_MEMORY_BUDGET` (1 MB)."""
     if memory_budget is None:
@@ -68,11 +69,11 @@ def sample_bytes(n_joints: int, itemsize: int = 8) -> int:
 
 
 def chunk_size(n_joints: int, samples: int | None = None, *, itemsize: int = 8,
-               memory_budget=None, backend: str | None = None) -> int | None:
+               memory_budget: int | None = None, backend: str | None = None) -> int | None:
     """Samples per ``lax.map`` chunk, None for all at once.
 
     On the CPU the intermediates grow as n^2 per sample and the fastest chunks are small:
-    measured on a 2-core CPU (benchmarks/regressor.py, 10,000 samples), 16 was fastest for
+    measured on a 2-core CPU (``python -m benchmarks.regressor``, 10,000 samples), 16 was fastest for
     3 joints and 8 for 7 joints (1, 2, 4, 8, 16, 32 tried). On an accelerator
     (``backend``, default ``jax.default_backend()``) all ``samples`` at once (``vmap``),
     or when they would take more than ``memory_budget`` bytes (:func:`sample_bytes`;
@@ -86,7 +87,8 @@ def chunk_size(n_joints: int, samples: int | None = None, *, itemsize: int = 8,
     return max(1, budget // per_sample)
 
 
-def unchecked_regressor(robot: Robot, q, qd, qdd):
+def unchecked_regressor(robot: Robot, q: Float[Array, "*batch n"], qd: Float[Array, "*batch n"],
+                        qdd: Float[Array, "*batch n"]) -> Float[Array, "*batch n p"]:
     """The regressor for arrays of shape ``(..., n)`` without checks or chunking, for use
     inside code that is traced anyway (the excitation design's fitness)."""
     n = robot.n_joints
@@ -114,7 +116,7 @@ def unchecked_regressor(robot: Robot, q, qd, qdd):
     w, dw, a = w[..., None, :, :], dw[..., None, :, :], a[..., None, :, :]
     u = cross(x, w)
 
-    def c(k):
+    def c(k: int) -> tuple[Array, Array, Array, Array]:
         return x[..., k], u[..., k], w[..., k], dw[..., k]
 
     (x0, u0, w0, d0), (x1, u1, w1, d1), (x2, u2, w2, d2) = c(0), c(1), c(2)
@@ -157,7 +159,8 @@ def _chunk_for(robot: Robot, q, dtype, memory_budget):
                       memory_budget=memory_budget)
 
 
-def regressor(robot: Robot, q, qd, qdd, *, dtype=jnp.float64,
+def regressor(robot: Robot, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
+              qdd: Float[ArrayLike, "*batch n"], *, dtype: DTypeLike = jnp.float64,
               memory_budget: int | None = None) -> Float[Array, "... n p"]:
     """Joint-torque regressor ``Y`` with ``tau = Y @ robot.params`` (Eq. 2).
 
@@ -173,7 +176,9 @@ def regressor(robot: Robot, q, qd, qdd, *, dtype=jnp.float64,
     return _regressor_jit(robot, q, qd, qdd, jnp.dtype(dtype), chunk)
 
 
-def inverse_dynamics(robot: Robot, params, q, qd, qdd, *,
+def inverse_dynamics(robot: Robot, params: Float[ArrayLike, " p"],
+                     q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
+                     qdd: Float[ArrayLike, "*batch n"], *,
                      memory_budget: int | None = None) -> Float[Array, "... n"]:
     """Joint torques ``tau = Y(q, qd, qdd) @ params`` (Eq. 1-2), ``(..., n)``, float64;
     ``memory_budget`` as for :func:`regressor`."""

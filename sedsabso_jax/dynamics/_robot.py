@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float
+from jax.typing import DTypeLike
+from jaxtyping import Array, ArrayLike, Float
 
 from .. import _x64
 
@@ -62,14 +66,14 @@ class Robot(eqx.Module):
 
     def __init__(
         self,
-        T_fixed,
-        screws,
-        joint_types,
-        params=None,
-        gravity=STANDARD_GRAVITY,
+        T_fixed: Float[ArrayLike, "n 4 4"] | Sequence[Any],
+        screws: Float[ArrayLike, "n 6"] | Sequence[Any],
+        joint_types: Sequence[str],
+        params: Float[ArrayLike, " p"] | Sequence[float] | None = None,
+        gravity: Float[ArrayLike, " 3"] | Sequence[float] = STANDARD_GRAVITY,
         *,
-        joint_names=None,
-        link_names=None,
+        joint_names: Sequence[str] | None = None,
+        link_names: Sequence[str] | None = None,
         name: str = "robot",
     ):
         joint_types = tuple(str(t) for t in joint_types)
@@ -126,7 +130,7 @@ class Robot(eqx.Module):
         """``("XX1", "YY1", ..., "FV<n>")``, matching :attr:`params`."""
         return tuple(f"{p}{i + 1}" for i in range(self.n_joints) for p in LINK_PARAMETERS)
 
-    def with_params(self, params) -> Robot:
+    def with_params(self, params: Float[ArrayLike, " p"]) -> Robot:
         """A copy of this robot with other parameters (same order as :attr:`params`)."""
         params = np.asarray(params, dtype=float)
         _expect_shape("params", params, (self.n_params,))
@@ -151,7 +155,8 @@ def _names(names, n: int, kind: str) -> tuple[str, ...]:
     return names
 
 
-def joint_arrays(robot: Robot, *named_arrays: tuple[str, object], dtype=jnp.float64):
+def joint_arrays(robot: Robot, *named_arrays: tuple[str, object], dtype: DTypeLike = jnp.float64
+                 ) -> list[Array]:
     """Convert joint-space arrays to ``dtype`` and check each ends in ``robot.n_joints``:
     a clear error before anything compiles.
 

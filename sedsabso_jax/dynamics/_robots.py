@@ -4,9 +4,14 @@ vendored KUKA LWR4+, and :func:`load` for a robot named on the command line."""
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
+from contextlib import AbstractContextManager
 from importlib import resources
+from pathlib import Path
+from typing import TypeAlias
 
 import numpy as np
+from jaxtyping import ArrayLike, Bool, Float
 
 from ..paper import TABLE2
 from . import _spatial as sp
@@ -15,6 +20,9 @@ from ._urdf import from_urdf
 
 __all__ = ["BUILTIN", "franka_panda", "from_dh", "from_mdh", "from_urdf", "kuka_lwr4",
            "kuka_lwr4_urdf", "load", "rs010n", "staubli_tx40", "staubli_tx40_urdf"]
+
+#: One DH column: a value per joint, or one value for every joint.
+_Column: TypeAlias = Float[ArrayLike, " n"] | Sequence[float]
 
 
 def _dh_columns(**columns):
@@ -45,8 +53,11 @@ def _joint_types(prismatic, n) -> tuple[str, ...]:
     return tuple("prismatic" if f else "revolute" for f in flags)
 
 
-def from_mdh(alpha, a, d, theta=0.0, *, prismatic=None, params=None, gravity=STANDARD_GRAVITY,
-             name: str = "mdh", joint_names=None) -> Robot:
+def from_mdh(alpha: _Column, a: _Column, d: _Column, theta: _Column = 0.0,
+             *, prismatic: Bool[ArrayLike, " n"] | Sequence[bool] | None = None,
+             params: Float[ArrayLike, " p"] | Sequence[float] | None = None,
+             gravity: Float[ArrayLike, " 3"] | Sequence[float] = STANDARD_GRAVITY,
+             name: str = "mdh", joint_names: Sequence[str] | None = None) -> Robot:
     """A chain from modified Denavit-Hartenberg parameters (Craig, 3rd ed., Sec. 3.4).
 
     Row ``i`` gives ``alpha_{i-1}, a_{i-1}, d_i, theta_i`` (rad, m), so that
@@ -68,8 +79,11 @@ def from_mdh(alpha, a, d, theta=0.0, *, prismatic=None, params=None, gravity=STA
     return Robot(T_fixed, screws, types, params, gravity, name=name, joint_names=joint_names)
 
 
-def from_dh(d, a, alpha, theta=0.0, *, prismatic=None, params=None, gravity=STANDARD_GRAVITY,
-            name: str = "dh", joint_names=None) -> Robot:
+def from_dh(d: _Column, a: _Column, alpha: _Column, theta: _Column = 0.0,
+            *, prismatic: Bool[ArrayLike, " n"] | Sequence[bool] | None = None,
+            params: Float[ArrayLike, " p"] | Sequence[float] | None = None,
+            gravity: Float[ArrayLike, " 3"] | Sequence[float] = STANDARD_GRAVITY,
+            name: str = "dh", joint_names: Sequence[str] | None = None) -> Robot:
     """A chain from standard (distal) Denavit-Hartenberg parameters.
 
     Row ``i`` gives ``d_i, a_i, alpha_i, theta_i`` (m, rad):
@@ -117,13 +131,13 @@ def rs010n() -> Robot:
                     params=params, name="RS010N", joint_names=("J1", "J2", "J3"))
 
 
-def kuka_lwr4_urdf():
+def kuka_lwr4_urdf() -> AbstractContextManager[Path]:
     """Context manager giving a file path of the vendored KUKA LWR4+ URDF."""
     path = resources.files("sedsabso_jax") / "data" / "kuka_lwr4" / "kuka_lwr4.urdf"
     return resources.as_file(path)
 
 
-def staubli_tx40_urdf():
+def staubli_tx40_urdf() -> AbstractContextManager[Path]:
     """Context manager giving a file path of the vendored Staubli TX40 URDF (FIGAROH,
     Apache-2.0; modified-DH link frames and a-priori inertials)."""
     path = (resources.files("sedsabso_jax") / "data" / "staubli_tx40"

@@ -6,7 +6,10 @@ Lynch & Park, *Modern Robotics* (2017), Sec. 3.3.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 
 def rot_x(angle: float) -> np.ndarray:
@@ -24,13 +27,13 @@ def rot_z(angle: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def rpy_matrix(rpy) -> np.ndarray:
+def rpy_matrix(rpy: Float[np.ndarray, " 3"] | Sequence[float]) -> Float[np.ndarray, "3 3"]:
     """URDF roll-pitch-yaw: R = Rz(yaw) Ry(pitch) Rx(roll) (fixed axes x, y, z)."""
     r, p, y = (float(v) for v in rpy)
     return rot_z(y) @ rot_y(p) @ rot_x(r)
 
 
-def rpy_from_matrix(R) -> np.ndarray:
+def rpy_from_matrix(R: Float[ArrayLike, "3 3"]) -> Float[np.ndarray, " 3"]:
     """The URDF roll-pitch-yaw of a rotation matrix (inverse of :func:`rpy_matrix`); at
     pitch +-pi/2 (gimbal lock) the roll is set to 0."""
     R = np.asarray(R, dtype=float)
@@ -42,7 +45,9 @@ def rpy_from_matrix(R) -> np.ndarray:
     return np.array([roll, pitch, yaw])
 
 
-def transform(rotation=None, translation=None) -> np.ndarray:
+def transform(rotation: Float[ArrayLike, "3 3"] | None = None,
+              translation: Float[ArrayLike, " 3"] | Sequence[float] | None = None
+              ) -> Float[np.ndarray, "4 4"]:
     T = np.eye(4)
     if rotation is not None:
         T[:3, :3] = rotation

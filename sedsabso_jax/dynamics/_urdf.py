@@ -15,10 +15,14 @@ import os
 import re
 import warnings
 from collections import defaultdict
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 from lxml import etree
 
+from .._output import PathLike
 from . import _spatial as sp
 from ._inertia import params_from_com, transform_params
 from ._robot import STANDARD_GRAVITY, Robot
@@ -96,7 +100,8 @@ def _inertial_params(link) -> np.ndarray:
     return transform_params(T, params_from_com(mass, np.zeros(3), I))
 
 
-def from_urdf(path, tip: str | None = None, *, gravity=STANDARD_GRAVITY) -> Robot:
+def from_urdf(path: PathLike, tip: str | None = None, *,
+              gravity: Float[ArrayLike, " 3"] | Sequence[float] = STANDARD_GRAVITY) -> Robot:
     """Serial chain from a URDF file, from its root link to ``tip`` (a link name).
 
     ``tip`` may be left out when the tree has one path of movable joints; a tree that
@@ -120,7 +125,7 @@ def from_urdf(path, tip: str | None = None, *, gravity=STANDARD_GRAVITY) -> Robo
         raise URDFError(f"URDF {path!r}: expected one root link, found {roots or 'none (a loop)'}")
     root = roots[0]
 
-    def moves(j) -> bool:  # any non-fixed joint, supported or not (checked below)
+    def moves(j: Any) -> bool:  # any non-fixed joint, supported or not (checked below)
         return j.type != "fixed" or any(moves(c) for c in children[j.child])
 
     if tip is None:
@@ -157,7 +162,7 @@ def from_urdf(path, tip: str | None = None, *, gravity=STANDARD_GRAVITY) -> Robo
     on_path = {j.name for j in path_joints}
     locked = []
 
-    def rigid_subtree(link_name) -> np.ndarray:
+    def rigid_subtree(link_name: str) -> np.ndarray:
         """Parameters of a link plus everything hanging off it off-path, in its frame."""
         total = _inertial_params(links[link_name])
         for j in children[link_name]:
@@ -216,7 +221,7 @@ def _leaves(children, link_name):
     return [leaf for j in children[link_name] for leaf in _leaves(children, j.child)]
 
 
-def joint_limit_rows(path, joint_names) -> np.ndarray:
+def joint_limit_rows(path: PathLike, joint_names: Sequence[str]) -> Float[np.ndarray, "n 4"]:
     """``<limit>`` of the named joints as rows ``(lower, upper, velocity, effort)``.
 
     A joint without ``<limit>`` (or a continuous joint, whose position limits URDF

@@ -15,6 +15,7 @@ from __future__ import annotations
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 from ._inertia import inertia_matrix, is_physically_consistent
 from ._robot import N_LINK_PARAMETERS, Robot
@@ -40,7 +41,8 @@ def _inertial(p10) -> str:
             f'<inertia {entries}/></inertial>')
 
 
-def to_urdf(robot: Robot, params=None, *, comment: str | None = None) -> str:
+def to_urdf(robot: Robot, params: Float[ArrayLike, " p"] | None = None, *,
+            comment: str | None = None) -> str:
     """URDF text of ``robot`` with ``params`` (12 per link, default ``robot.params``),
     which must be physically consistent (every link a real body: positive mass, inertia
     satisfying the triangle inequalities); ``comment`` goes into an XML comment."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 from ..dynamics._limits import JointLimits
 from ._trajectory import FourierTrajectory
@@ -16,7 +17,9 @@ def _fmt(value: float, angular: bool, suffix: str) -> str:
     return f"{value:.6g} m{suffix}"
 
 
-def violations(limits: JointLimits, q, qd, qdd, times=None) -> list[str]:
+def violations(limits: JointLimits, q: Float[ArrayLike, "*batch n"],
+               qd: Float[ArrayLike, "*batch n"], qdd: Float[ArrayLike, "*batch n"],
+               times: Float[ArrayLike, "*batch"] | None = None) -> list[str]:
     """One readable line per (joint, limit) that ``q, qd, qdd`` (each ``(..., n)``)
     violate, with the worst sample, e.g. ``"joint 2 (J2) velocity: |qd| reaches 2.1 rad/s
     (120.3 deg/s) at t = 3.2 s, above the limit 1.745 rad/s (100 deg/s); 17 of 1000
@@ -68,7 +71,8 @@ def violations(limits: JointLimits, q, qd, qdd, times=None) -> list[str]:
     return out
 
 
-def check_trajectory(traj: FourierTrajectory, limits: JointLimits, times) -> None:
+def check_trajectory(traj: FourierTrajectory, limits: JointLimits,
+                     times: Float[ArrayLike, " T"]) -> None:
     """Raise ValueError naming the joints and limits that ``traj`` violates at ``times``."""
     if traj.n_joints != limits.n_joints:
         raise ValueError(f"trajectory has {traj.n_joints} joints, limits have "

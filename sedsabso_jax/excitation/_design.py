@@ -58,6 +58,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import PRNGKeyArray
 
 from .._output import jsonable
 from ..dynamics._base_parameters import BaseParameters, base_parameters
@@ -85,7 +86,8 @@ DEFAULT_ITERATIONS = 100
 RANDOM_BATCH = 40
 
 
-def random_batch(draws: int, n_joints: int, design_samples: int, memory_budget=None) -> int:
+def random_batch(draws: int, n_joints: int, design_samples: int,
+                 memory_budget: int | None = None) -> int:
     """Random draws per compiled batch of the random baseline: :data:`RANDOM_BATCH` on the
     CPU; on an accelerator all ``draws`` at once, or as many as ``memory_budget`` bytes
     allow (each draw evaluates the regressor at ``design_samples`` times twice; at least
@@ -205,7 +207,7 @@ class ExcitationDesign:
         )
 
 
-def default_solver():
+def default_solver() -> LDWPSO:
     """The default swarm of :func:`design_excitation`: LDWPSO with 40 particles (the
     paper's LDWPSO settings otherwise); the module docstring compares it with BSO and
     SEDSABSO on this problem."""
@@ -216,7 +218,8 @@ def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = D
                       wf: float = DEFAULT_WF, duration: float = DEFAULT_DURATION,
                       rate: float = DEFAULT_RATE, design_samples: int = DEFAULT_DESIGN_SAMPLES,
                       solver: AbstractSwarm | None = None,
-                      iterations: int = DEFAULT_ITERATIONS, key=None,
+                      iterations: int = DEFAULT_ITERATIONS,
+                      key: PRNGKeyArray | int | None = None,
                       graded_penalty: bool = True,
                       base: BaseParameters | None = None,
                       memory_budget: int | None = None) -> ExcitationDesign:
@@ -300,7 +303,9 @@ def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = D
     random_s = time.perf_counter() - t0
     random_traj, random_cond = None, math.inf
     if best_f < PENALTY:
-        random_traj = FourierTrajectory.from_vector(best_x, n, n_harmonics, wf)
+        # best_x is set whenever best_f is below the penalty
+        random_traj = FourierTrajectory.from_vector(best_x,  # type: ignore[arg-type]
+                                                    n, n_harmonics, wf)
         random_cond = condition_number(base, *random_traj.sample(times),
                                        memory_budget=memory_budget)
     return ExcitationDesign(

@@ -10,9 +10,10 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array
+from jaxtyping import Array, ArrayLike, Float
 
 from ..dynamics._base_parameters import BaseParameters
+from ..dynamics._limits import JointLimits
 from ..dynamics._regressor import check_memory_budget, sample_bytes, unchecked_regressor
 from ..dynamics._robot import Robot
 from ._trajectory import basis, evaluate
@@ -30,7 +31,7 @@ LIMIT_MARGIN = 1e-9
 _COND_CHUNK = 50
 
 
-def condition_samples(n_joints: int, samples: int, memory_budget=None) -> int:
+def condition_samples(n_joints: int, samples: int, memory_budget: int | None = None) -> int:
     """Samples per regressor call in :func:`condition_number`: on the CPU 50 (a shape
     already compiled, so no new compilation for any ``T``); on an accelerator all of
     them, a multiple of 50, or as many multiples of 50 as ``memory_budget`` bytes allow
@@ -42,7 +43,9 @@ def condition_samples(n_joints: int, samples: int, memory_budget=None) -> int:
     return _COND_CHUNK * min(fit, -(-samples // _COND_CHUNK))
 
 
-def condition_number(base: BaseParameters, q, qd, qdd, *, memory_budget=None) -> float:
+def condition_number(base: BaseParameters, q: Float[ArrayLike, "T n"],
+                     qd: Float[ArrayLike, "T n"], qdd: Float[ArrayLike, "T n"], *,
+                     memory_budget: int | None = None) -> float:
     """2-norm condition number of the stacked base regressor ``W_b`` (Eq. 8) at the samples
     ``(T, n)``: ``sigma_max / sigma_min`` by an SVD (``inf`` when rank-deficient).
 
@@ -114,13 +117,14 @@ class DesignProblem(eqx.Module):
     N: int = eqx.field(static=True)
     graded: bool = eqx.field(static=True)
 
-    def split(self, x):
+    def split(self, x: Float[Array, " d"]
+              ) -> tuple[Float[Array, "n N"], Float[Array, "n N"], Float[Array, " n"]]:
         n, N = self.n, self.N
         return x[: n * N].reshape(n, N), x[n * N: 2 * n * N].reshape(n, N), x[2 * n * N:]
 
     @classmethod
-    def build(cls, robot, base, limits, N: int, wf: float, duration: float, S: int,
-              graded: bool = True) -> DesignProblem:
+    def build(cls, robot: Robot, base: BaseParameters, limits: JointLimits, N: int, wf: float,
+              duration: float, S: int, graded: bool = True) -> DesignProblem:
         """The fitness data: cond on ``S`` times over ``[0, duration)``, limits checked at ``S``
         times over one period, tightened by :func:`sampling_margin` and ``LIMIT_MARGIN``, so a
         feasible design satisfies the limits at every time, not only at the samples."""
@@ -144,7 +148,7 @@ class DesignProblem(eqx.Module):
         )
 
 
-def design_fitness(x, problem: DesignProblem):
+def design_fitness(x: Float[Array, " d"], problem: DesignProblem) -> Float[Array, ""]:
     """Eq. 9 at coefficients ``x`` (:meth:`FourierTrajectory.to_vector` order):
     ``cond(W_b)`` at the design times, plus :data:`PENALTY` if a limit is violated at the
     check times (and, with ``problem.graded``, ``PENALTY`` times the summed relative excess

@@ -22,15 +22,16 @@ import math
 import os
 import zipfile
 import zlib
+from typing import Any
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float
+from jaxtyping import Array, ArrayLike, Float
 
 from .. import _x64
-from .._output import atomic_write
+from .._output import PathLike, atomic_write
 
 #: The default fundamental frequency of :func:`~sedsabso_jax.design_excitation` [rad/s]:
 #: one period in the 10 s experiment.
@@ -60,7 +61,7 @@ def _float_array(name: str, value, ndim: int) -> Array:
     return jnp.asarray(arr, dtype=jnp.float64)
 
 
-def check_wf(wf) -> float:
+def check_wf(wf: float) -> float:
     """``wf`` as a float, or a ValueError unless it is a positive finite number (rad/s)."""
     try:
         wf = float(wf)
@@ -71,7 +72,10 @@ def check_wf(wf) -> float:
     return wf
 
 
-def evaluate(a, b, q0, kw, c, s):
+def evaluate(a: Float[Array | np.ndarray, "n N"], b: Float[Array | np.ndarray, "n N"],
+             q0: Float[Array | np.ndarray, " n"], kw: Float[Array | np.ndarray, " N"],
+             c: Float[Array | np.ndarray, "*batch N"], s: Float[Array | np.ndarray, "*batch N"]
+             ) -> tuple[Any, Any, Any]:
     """``(q, qd, qdd)`` from coefficients ``(n, N)`` and ``c = cos(k wf t)``,
     ``s = sin(k wf t)`` of shape ``(..., N)``; ``kw = k wf``. Returns ``(..., n)`` each
     (numpy for numpy arguments)."""
@@ -89,7 +93,8 @@ def _mm(x, y):
     return jnp.matmul(x, y, precision=jax.lax.Precision.HIGHEST)
 
 
-def basis(times, n_harmonics: int, wf: float):
+def basis(times: Float[ArrayLike, "*batch"], n_harmonics: int, wf: float
+          ) -> tuple[Float[Array, " N"], Float[Array, "*batch N"], Float[Array, "*batch N"]]:
     """``(k wf, cos(k wf t), sin(k wf t))`` for ``k = 1..N``, the last two ``t.shape + (N,)``."""
     kw = wf * jnp.arange(1, n_harmonics + 1, dtype=jnp.float64)
     phase = jnp.asarray(times, jnp.float64)[..., None] * kw
@@ -111,7 +116,8 @@ class FourierTrajectory(eqx.Module):
     q0: Float[Array, " n"]
     wf: float = eqx.field(static=True)
 
-    def __init__(self, a, b, q0, wf: float = DEFAULT_WF):
+    def __init__(self, a: Float[ArrayLike, "n N"], b: Float[ArrayLike, "n N"],
+                 q0: Float[ArrayLike, " n"], wf: float = DEFAULT_WF):
         a = _float_array("a", a, 2)
         b = _float_array("b", b, 2)
         q0 = _float_array("q0", q0, 1)
@@ -139,14 +145,16 @@ class FourierTrajectory(eqx.Module):
         """``2 pi / wf`` in seconds."""
         return 2 * math.pi / self.wf
 
-    def __call__(self, t) -> tuple[Array, Array, Array]:
+    def __call__(self, t: Float[ArrayLike, "*batch"]) -> tuple[Array, Array, Array]:
         """``(q, qd, qdd)`` at times ``t`` (seconds, any shape), each ``t.shape + (n,)``."""
         t = jnp.asarray(t)
         if not (jnp.issubdtype(t.dtype, jnp.floating) or jnp.issubdtype(t.dtype, jnp.integer)):
             raise ValueError(f"t must be real times in seconds, got dtype {t.dtype}")
         return evaluate(self.a, self.b, self.q0, *basis(t, self.n_harmonics, self.wf))
 
-    def sample(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def sample(self, times: Float[ArrayLike, " T"]
+               ) -> tuple[Float[np.ndarray, "T n"], Float[np.ndarray, "T n"],
+                          Float[np.ndarray, "T n"]]:
         """``(q, qd, qdd)`` at ``times (T,)`` in numpy, float64 (no JAX dispatch or
         compilation), each ``(T, n)``."""
         kw = self.wf * np.arange(1, self.n_harmonics + 1)
@@ -159,7 +167,7 @@ class FourierTrajectory(eqx.Module):
         return jnp.concatenate([self.a.ravel(), self.b.ravel(), self.q0])
 
     @classmethod
-    def from_vector(cls, x, n_joints: int, n_harmonics: int,
+    def from_vector(cls, x: Float[ArrayLike, " d"], n_joints: int, n_harmonics: int,
                     wf: float = DEFAULT_WF) -> FourierTrajectory:
         """Inverse of :meth:`to_vector`."""
         n, N = int(n_joints), int(n_harmonics)
@@ -173,7 +181,7 @@ class FourierTrajectory(eqx.Module):
         return cls(x[: n * N].reshape(n, N), x[n * N: 2 * n * N].reshape(n, N),
                    x[2 * n * N:], wf)
 
-    def save(self, path) -> None:
+    def save(self, path: PathLike) -> None:
         """Write ``.npz`` (keys ``format a b q0 wf``) atomically: a temporary file in the
         same directory, then ``os.replace``. The path is used as given."""
         arrays = {"format": np.array(_FORMAT), "a": np.asarray(self.a),
@@ -182,7 +190,7 @@ class FourierTrajectory(eqx.Module):
         atomic_write(path, lambda fh: np.savez(fh, **arrays))  # type: ignore[arg-type]
 
     @classmethod
-    def load(cls, path) -> FourierTrajectory:
+    def load(cls, path: PathLike) -> FourierTrajectory:
         """Read a file written by :meth:`save` (``np.load(allow_pickle=False)``: object
         arrays are refused, nothing is unpickled)."""
         path = os.fspath(path)

@@ -12,14 +12,19 @@ judge the fit on held-out data::
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable, Iterable
+from typing import Any
 
 import numpy as np
+from jaxtyping import ArrayLike, Int
 
-from ..dynamics._base_parameters import base_parameters
+from ..dynamics._base_parameters import BaseParameters, base_parameters
+from ..dynamics._robot import Robot
 from ..measurements._container import Measurements
+from ..measurements._transmission import TransmissionLike
 from ._estimators import OLS, BoxSearch, PhysicallyConsistent
-from ._fitting import Estimator
-from ._identify import identify, torque_model
+from ._fitting import Estimator, Limits, Sigma
+from ._identify import Data, identify, torque_model
 from ._model import TorqueModel
 from ._report import IdentificationReport
 from ._validation import (
@@ -38,7 +43,7 @@ SIGMA_CANDIDATES = (None, "residual", "limits")
 AUTO = "auto"
 
 
-def estimator_candidates(method: str | None = None, sigma=AUTO, **options
+def estimator_candidates(method: str | None = None, sigma: Sigma = AUTO, **options: Any
                          ) -> tuple[Estimator, ...]:
     """The estimators the default chooses among.
 
@@ -69,10 +74,14 @@ def estimator_candidates(method: str | None = None, sigma=AUTO, **options
                  if s is not None or first.default_weighting == "equal")
 
 
-def select_and_identify(robot, data, *, held_out=None, limits=None, transmission=None,
-                        estimators=None, frictions=None, folds=DEFAULT_FOLDS,
-                        physical: bool = False, prior_strength=0.0, base=None,
-                        progress=None) -> IdentificationReport:
+def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = None,
+                        limits: Limits = None, transmission: TransmissionLike = None,
+                        estimators: Estimator | Iterable[Estimator] | None = None,
+                        frictions: str | Iterable[str | TorqueModel] | None = None,
+                        folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS, physical: bool = False,
+                        prior_strength: float | str = 0.0, base: BaseParameters | None = None,
+                        progress: Callable[[str, int, int], object] | None = None
+                        ) -> IdentificationReport:
     """Identify ``robot`` from ``data`` as ``sedsabso-jax identify`` does by default.
 
     1. Model choice: every estimator of ``estimators`` (default
@@ -98,13 +107,14 @@ def select_and_identify(robot, data, *, held_out=None, limits=None, transmission
     :func:`~._identify.identify`; ``progress(label, done, total)`` after each candidate's
     cross-validation. Returns the :class:`~._report.IdentificationReport` the command
     prints (``text()``) and writes (``write(...)``)."""
-    data = data if isinstance(data, Measurements) else Measurements(*data)
+    # a tuple's arrays go to Measurements, whose __post_init__ converts them
+    data = data if isinstance(data, Measurements) else Measurements(*data)  # type: ignore[arg-type]
     if held_out is not None and not isinstance(held_out, Measurements):
-        held_out = Measurements(*held_out)
+        held_out = Measurements(*held_out)  # type: ignore[arg-type]
     estimators = ESTIMATOR_CANDIDATES if estimators is None else (
         (estimators,) if isinstance(estimators, Estimator) else tuple(estimators))
     frictions = FRICTION_CANDIDATES if frictions is None else (
-        (frictions,) if isinstance(frictions, str) else tuple(frictions))
+        (frictions,) if isinstance(frictions, (str, TorqueModel)) else tuple(frictions))
     if prior_strength != 0.0 and not physical:
         raise ValueError("prior_strength needs physical=True: the pull to the a-priori "
                          "parameters is part of the physically consistent fit")
@@ -124,8 +134,9 @@ def select_and_identify(robot, data, *, held_out=None, limits=None, transmission
         raise ValueError("folds=0 turns cross-validation off, so nothing can be chosen by it: "
                          "give one estimator and one friction model")
     base = base_parameters(robot) if base is None else base
-    common = dict(limits=limits, transmission=transmission, base=base)
+    common: dict[str, Any] = dict(limits=limits, transmission=transmission, base=base)
     selection = cv = None
+    model: TorqueModel | str
     if choose:
         selection = select_model(robot, data, estimators=estimators, frictions=frictions,
                                  folds=folds, progress=progress, **common)

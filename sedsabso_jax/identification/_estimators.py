@@ -23,11 +23,13 @@ from __future__ import annotations
 
 import dataclasses
 import numbers
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import equinox as eqx
 import jax
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 from ..optim._baselines import least_squares
 from ..optim._box import box_around, check_bounds
@@ -35,7 +37,7 @@ from ..optim._driver import minimise
 from ..optim._fitness import L1Residual
 from ..optim._linear import l1_solve
 from ..optim._registry import SWARMS
-from ._fitting import Estimator, EstimatorFit, FitProblem, check_sigma, weigh
+from ._fitting import Estimator, EstimatorFit, FitProblem, Limits, Sigma, check_sigma, weigh
 from ._model import TorqueModel
 from ._physical import PSD_MARGIN, fit_physical
 
@@ -67,7 +69,8 @@ def _prior(value) -> tuple[float, ...] | None:
     return tuple(float(x) for x in v)
 
 
-def prior_of(prior, model: TorqueModel) -> np.ndarray:
+def prior_of(prior: Float[ArrayLike, " p"] | Sequence[float] | None, model: TorqueModel
+             ) -> Float[np.ndarray, " p"]:
     """The full a-priori parameters: ``prior``, or the robot's own; checked."""
     robot = model.robot
     p = np.asarray(robot.params if prior is None else prior, dtype=float)
@@ -215,7 +218,7 @@ class BoxSearch(Estimator):
         object.__setattr__(self, "prior", _prior(self.prior))
 
     @classmethod
-    def from_name(cls, name: str, **options) -> BoxSearch:
+    def from_name(cls, name: str, **options: Any) -> BoxSearch:
         """The swarm ``name`` with the paper's settings (Sec. 5.2) in a box search."""
         out = super().from_name(name, solver=SWARMS[name].paper(), **options)
         assert isinstance(out, BoxSearch)
@@ -240,7 +243,7 @@ class BoxSearch(Estimator):
         lower, upper = box_around(centre, fraction, floor)
         return lower, upper, {"fraction": fraction, "floor": floor, "centre": "prior"}
 
-    def check(self, model: TorqueModel, limits) -> None:
+    def check(self, model: TorqueModel, limits: Limits) -> None:
         super().check(model, limits)
         self.bounds(model)
 
@@ -292,7 +295,7 @@ class PhysicallyConsistent(Estimator):
         return self.least_squares.name
 
     @property
-    def sigma(self):
+    def sigma(self) -> Sigma:
         return self.least_squares.sigma
 
     @property
@@ -307,7 +310,7 @@ class PhysicallyConsistent(Estimator):
         return {**super().settings(), "prior_weight": self.prior_weight,
                 "prior_strength": self.prior_strength, "psd_margin": PSD_MARGIN}
 
-    def check(self, model: TorqueModel, limits) -> None:
+    def check(self, model: TorqueModel, limits: Limits) -> None:
         super().check(model, limits)
         prior_of(self.prior, model)
 

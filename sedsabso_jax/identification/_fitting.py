@@ -13,9 +13,11 @@ from __future__ import annotations
 
 import abc
 import dataclasses
-from typing import Any, ClassVar
+from collections.abc import Sequence
+from typing import Any, ClassVar, TypeAlias
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 from .._deprecation import caller_stacklevel
 from ..optim._linear import Factorization, factorize
@@ -24,9 +26,15 @@ from ._model import TorqueModel
 #: How rows are weighted: each joint's rows divided by its standard deviation sigma.
 WEIGHTINGS = ("equal", "residual", "limits", "given")
 _NAMED: dict[str, type[Estimator]] = {}
+#: A row weighting (:func:`weigh`): None, ``"residual"``, ``"limits"`` or one positive
+#: number per joint.
+Sigma: TypeAlias = str | Sequence[float] | Float[ArrayLike, " n"] | None
+#: Per-joint torque limits (N m), or None where they are unknown.
+Limits: TypeAlias = Sequence[float] | Float[ArrayLike, " n"] | None
 
 
-def per_joint(name: str, value, n: int, allow_none: bool = True) -> np.ndarray | None:
+def per_joint(name: str, value: Sigma, n: int, allow_none: bool = True
+              ) -> Float[np.ndarray, " n"] | None:
     """``value`` as ``n`` positive finite numbers (one per joint), or None if allowed."""
     if value is None and allow_none:
         return None
@@ -37,7 +45,7 @@ def per_joint(name: str, value, n: int, allow_none: bool = True) -> np.ndarray |
     return v
 
 
-def check_sigma(sigma):
+def check_sigma(sigma: Sigma) -> str | tuple[float, ...] | None:
     """``sigma`` as an estimator keeps it: None, ``"residual"``, ``"limits"`` or a tuple of
     positive finite numbers (one per joint; their count is checked against the data)."""
     if sigma is None or (isinstance(sigma, str) and sigma in ("residual", "limits")):
@@ -52,7 +60,7 @@ def check_sigma(sigma):
     return tuple(float(x) for x in v)
 
 
-def weighting(sigma, default: str = "equal") -> str:
+def weighting(sigma: Sigma, default: str = "equal") -> str:
     """The kind of weighting ``sigma`` stands for (one of :data:`WEIGHTINGS`); None is
     ``default``."""
     if sigma is None:
@@ -130,7 +138,7 @@ class WeightedRows:
         return self.factor
 
 
-def weigh(problem: FitProblem, sigma, *, default: str = "equal",
+def weigh(problem: FitProblem, sigma: Sigma, *, default: str = "equal",
           factor: bool = False) -> WeightedRows:
     """The row weighting every estimator uses: each joint's rows divided by its sigma.
 
@@ -213,7 +221,7 @@ class Estimator(abc.ABC):
         ``physical``, ``weights`` and the estimator's own)."""
         return {"method": self.name, "physical": self.physical, "weights": self.weights}
 
-    def check(self, model: TorqueModel, limits) -> None:
+    def check(self, model: TorqueModel, limits: Limits) -> None:
         """What can be checked before any data: the options against ``model`` and the
         torque ``limits`` (None if unknown)."""
         sigma = getattr(self, "sigma", None)
@@ -223,7 +231,7 @@ class Estimator(abc.ABC):
             per_joint("sigma", sigma, model.robot.n_joints, allow_none=False)
 
     @classmethod
-    def from_name(cls, name: str, **options) -> Estimator:
+    def from_name(cls, name: str, **options: Any) -> Estimator:
         """The estimator this class registers as ``name``, built with those ``options``
         it has (the command passes every swarm option to every estimator)."""
         fields = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
@@ -235,7 +243,7 @@ class Estimator(abc.ABC):
         return tuple(_NAMED)
 
     @staticmethod
-    def named(name: str, **options) -> Estimator:
+    def named(name: str, **options: Any) -> Estimator:
         """The estimator registered as ``name`` (e.g. ``"WLS"``, ``"SEDSABSO"``), built
         with ``options`` (``sigma``, ``runs``, ...; those it does not have are ignored)."""
         if name not in _NAMED:
@@ -243,7 +251,7 @@ class Estimator(abc.ABC):
         return _NAMED[name].from_name(name, **options)  # type: ignore[attr-defined]
 
 
-def describe(estimator: Estimator, model: TorqueModel, limits) -> dict:
+def describe(estimator: Estimator, model: TorqueModel, limits: Limits) -> dict:
     """The settings of fitting ``model`` with ``estimator`` that do not depend on the data,
     in the order the reports write them."""
     own = dict(estimator.settings())

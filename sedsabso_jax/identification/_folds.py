@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+from jaxtyping import ArrayLike, Float, Int
 
 from ._fitting import Estimator, FitProblem, describe
 from ._metrics import Metrics, validation_metrics
@@ -20,7 +21,8 @@ REPEAT_CORRELATION = 0.95
 TIE_FRACTION = 0.01
 
 
-def repeat_period(times, q, *, correlation: float = REPEAT_CORRELATION) -> float | None:
+def repeat_period(times: Float[ArrayLike, " T"], q: Float[ArrayLike, "T n"], *,
+                  correlation: float = REPEAT_CORRELATION) -> float | None:
     """The period [s] after which the positions ``q (T, n)`` repeat (the lag of highest
     normalised autocorrelation between 10 % and 90 % of the recording, if it reaches
     ``correlation``), or None when the motion does not repeat."""
@@ -40,7 +42,8 @@ def repeat_period(times, q, *, correlation: float = REPEAT_CORRELATION) -> float
     return float(t[lag_best] - t[0])
 
 
-def phase_folds(times, q, folds: int = DEFAULT_FOLDS) -> tuple[np.ndarray, float | None]:
+def phase_folds(times: Float[ArrayLike, " T"], q: Float[ArrayLike, "T n"],
+                folds: int = DEFAULT_FOLDS) -> tuple[Int[np.ndarray, " T"], float | None]:
     """``(fold of each sample, period)``: folds of the trajectory's phase (module
     docstring); contiguous blocks when the motion does not repeat (period None)."""
     times = np.asarray(times, dtype=float)
@@ -105,7 +108,8 @@ def score_of(metrics: Metrics) -> float:
     return metrics.relative_rms_percent_overall
 
 
-def fold_labels(times, q, folds) -> tuple[np.ndarray, float | None]:
+def fold_labels(times: Float[np.ndarray, " T"], q: Float[np.ndarray, "T n"],
+                folds: int | Int[ArrayLike, " T"]) -> tuple[Int[np.ndarray, " T"], float | None]:
     """The fold of each sample and the period: phase folds for an int ``folds``, or
     ``folds`` itself as given labels ``0..K-1`` (one per sample)."""
     if np.ndim(folds) == 1:
@@ -116,17 +120,18 @@ def fold_labels(times, q, folds) -> tuple[np.ndarray, float | None]:
         folds = int(labels.max()) + 1
         if folds < 2:
             raise ValueError("fold labels must name at least 2 folds")
-    else:
-        labels, period = phase_folds(times, q, folds)
-    for k in range(folds):
+    else:  # folds is an int here (np.ndim 0), which mypy cannot tell
+        labels, period = phase_folds(times, q, folds)  # type: ignore[arg-type]
+    for k in range(folds):  # type: ignore[arg-type]
         if not np.any(labels == k):
             raise ValueError(f"fold {k + 1} of {folds} is empty: the recording is too short "
                              f"for {folds} folds")
     return labels, period
 
 
-def cross_validation_of(estimator: Estimator, model: TorqueModel, Y, tau, limits, labels,
-                        period) -> CrossValidation:
+def cross_validation_of(estimator: Estimator, model: TorqueModel, Y: Float[np.ndarray, "T n d"],
+                        tau: Float[np.ndarray, "T n"], limits: Float[np.ndarray, " n"] | None,
+                        labels: Int[np.ndarray, " T"], period: float | None) -> CrossValidation:
     """Fit ``estimator`` to all folds but one of the rows ``Y (T, n, d)``, ``tau (T, n)``
     and predict that one, for each fold of ``labels``."""
     folds = int(labels.max()) + 1

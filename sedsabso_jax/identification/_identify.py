@@ -18,9 +18,11 @@ from __future__ import annotations
 import dataclasses
 import time
 import warnings
-from typing import Any
+from collections.abc import Sequence
+from typing import Any, TypeAlias
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 from .. import _deprecation
 from .._output import jsonable
@@ -29,9 +31,10 @@ from ..dynamics._base_parameters import BaseParameters
 from ..dynamics._robot import Robot
 from ..dynamics._urdf_writer import to_urdf
 from ..measurements._container import Measurements
+from ..measurements._transmission import TransmissionLike
 from ..optim._linear import factorize
 from ._estimators import OLS
-from ._fitting import Estimator, FitProblem, describe, per_joint
+from ._fitting import Estimator, FitProblem, Limits, describe, per_joint
 from ._legacy import METHODS as METHODS
 from ._legacy import RegressorFit as RegressorFit
 from ._legacy import Setup as Setup
@@ -41,6 +44,10 @@ from ._legacy import prepare as prepare
 from ._legacy import swarm_box as swarm_box
 from ._metrics import nrms_over_limits
 from ._model import SMOOTH_VELOCITY, TorqueModel
+
+#: Joint data: a :class:`~sedsabso_jax.Measurements`, or its arrays ``(q, qd, qdd, tau)``
+#: (``(times, q, qd, qdd, tau)`` where the times are needed), each ``(samples, n)``.
+Data: TypeAlias = Measurements | Sequence[ArrayLike]
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -73,7 +80,8 @@ class Identification:
     result: Any = None
     estimator: Estimator | None = None
 
-    def predict(self, q, qd, qdd) -> np.ndarray:
+    def predict(self, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
+                qdd: Float[ArrayLike, "*batch n"]) -> Float[np.ndarray, "*batch n"]:
         """Predicted torques ``(..., n)`` for states ``(..., n)``."""
         return self.model.predict(self.values, q, qd, qdd)
 
@@ -107,7 +115,9 @@ class Identification:
                 f"friction={self.model.friction!r}, fit RMS per joint [{rms}])")
 
 
-def check_data(robot: Robot, q, qd, qdd, tau):
+def check_data(robot: Robot, q: Float[ArrayLike, "samples n"], qd: Float[ArrayLike, "samples n"],
+               qdd: Float[ArrayLike, "samples n"], tau: Float[ArrayLike, "samples n"]
+               ) -> list[Float[np.ndarray, "samples n"]]:
     """``q, qd, qdd, tau`` as float arrays ``(samples, n)`` of one length, finite."""
     n = robot.n_joints
     arrays = []
@@ -128,7 +138,7 @@ def check_data(robot: Robot, q, qd, qdd, tau):
     return arrays
 
 
-def data_arrays(robot: Robot, data, *, times: bool = False):
+def data_arrays(robot: Robot, data: Data, *, times: bool = False) -> list[np.ndarray]:
     """``[q, qd, qdd, tau]`` of ``data`` (a :class:`~sedsabso_jax.Measurements` or a
     tuple of those arrays), checked; with ``times``, ``[times, q, qd, qdd, tau]`` (a tuple
     then holds the times first)."""
@@ -153,7 +163,8 @@ def data_arrays(robot: Robot, data, *, times: bool = False):
     return [t, *checked]
 
 
-def torque_model(robot: Robot, model, *, transmission=None, base=None,
+def torque_model(robot: Robot, model: TorqueModel | str | None, *,
+                 transmission: TransmissionLike = None, base: BaseParameters | None = None,
                  smooth_velocity: float = SMOOTH_VELOCITY) -> TorqueModel:
     """``model`` (a :class:`~._model.TorqueModel` of ``robot``, or friction terms as a
     string, None for ``"viscous-coulomb"``) as a TorqueModel; ``transmission``, ``base``
@@ -176,9 +187,10 @@ def torque_model(robot: Robot, model, *, transmission=None, base=None,
                           base=base)
 
 
-def identify(robot: Robot, data, estimator: Estimator = OLS(), model=None, *old_args,
-             limits=None, transmission=None, base: BaseParameters | None = None,
-             smooth_velocity: float = SMOOTH_VELOCITY, **old_keywords) -> Identification:
+def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
+             model: TorqueModel | str | None = None, *old_args: Any, limits: Limits = None,
+             transmission: TransmissionLike = None, base: BaseParameters | None = None,
+             smooth_velocity: float = SMOOTH_VELOCITY, **old_keywords: Any) -> Identification:
     """Identify the base parameters (plus extra friction terms) of ``robot`` from
     ``data``.
 
@@ -211,7 +223,7 @@ def identify(robot: Robot, data, estimator: Estimator = OLS(), model=None, *old_
                 raise TypeError(f"identify() takes (robot, data, estimator, model), or 0.2's "
                                 f"(robot, q, qd, qdd, tau); got {4 + len(old_args)} "
                                 f"positional arguments")
-            data = (data, estimator, model, old_args[0])
+            data = (data, estimator, model, old_args[0])  # type: ignore[assignment]
         elif not isinstance(estimator, Estimator) or model is not None:
             raise TypeError("0.2's keyword settings (method=..., friction=..., ...) go with "
                             "identify(robot, q, qd, qdd, tau, ...), not with an estimator")

@@ -8,14 +8,20 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 from .. import _deprecation
+from ..dynamics._base_parameters import BaseParameters
 from ..dynamics._robot import Robot
+from ..measurements._transmission import TransmissionLike
 from ..optim._registry import SWARMS
+from ..optim._solver import AbstractSolver
 from ._estimators import OLS, BoxSearch, PhysicallyConsistent
-from ._fitting import Estimator, EstimatorFit, FitProblem, describe, per_joint
+from ._fitting import Estimator, EstimatorFit, FitProblem, Limits, Sigma, describe, per_joint
 from ._model import SMOOTH_VELOCITY, TorqueModel
 
 #: The names :meth:`~._fitting.Estimator.named` knows (and the command's ``--method``).
@@ -28,10 +34,12 @@ SETTINGS = {"method": "OLS", "sigma": None, "physical": False, "prior": None,
             "iterations": 600, "seed": 0, "solver": None}
 
 
-def estimator_from(robot: Robot, *, method: str = "OLS", sigma=None, physical: bool = False,
-                   prior=None, prior_weight: float = 0.0, prior_strength: float = 0.0,
-                   box=(0.5, 0.5), runs: int = 1, iterations: int = 600, seed: int = 0,
-                   solver=None) -> Estimator:
+def estimator_from(robot: Robot, *, method: str = "OLS", sigma: Sigma = None,
+                   physical: bool = False,
+                   prior: Float[ArrayLike, " p"] | Sequence[float] | None = None,
+                   prior_weight: float = 0.0, prior_strength: float = 0.0,
+                   box: tuple[Any, Any] = (0.5, 0.5), runs: int = 1, iterations: int = 600,
+                   seed: int = 0, solver: AbstractSolver | None = None) -> Estimator:
     """The estimator 0.2's keyword settings describe: ``method`` a registered name,
     ``physical`` wraps OLS / WLS in :class:`~._estimators.PhysicallyConsistent`, a swarm
     name becomes a :class:`~._estimators.BoxSearch` with ``solver`` (default its
@@ -62,7 +70,8 @@ def estimator_from(robot: Robot, *, method: str = "OLS", sigma=None, physical: b
     return physical_fit if physical else estimator
 
 
-def from_keywords(robot: Robot, keywords: dict, *, transmission=None, base=None,
+def from_keywords(robot: Robot, keywords: dict, *, transmission: TransmissionLike = None,
+                  base: BaseParameters | None = None,
                   smooth_velocity: float = SMOOTH_VELOCITY) -> tuple[Estimator, TorqueModel]:
     """``(estimator, model)`` for 0.2's keywords (:data:`SETTINGS`, ``friction``, and the
     deprecated ``weights`` for ``sigma``)."""
@@ -99,9 +108,10 @@ class Setup:
         return describe(self.estimator, self.model, self.limits)
 
 
-def prepare(robot: Robot, *, friction: str = "viscous-coulomb", limits=None,
-            smooth_velocity: float = SMOOTH_VELOCITY, base=None, transmission=None,
-            warn: bool = True, **settings) -> Setup:
+def prepare(robot: Robot, *, friction: str = "viscous-coulomb", limits: Limits = None,
+            smooth_velocity: float = SMOOTH_VELOCITY, base: BaseParameters | None = None,
+            transmission: TransmissionLike = None, warn: bool = True, **settings: Any
+            ) -> Setup:
     """0.2's form: check ``identify``'s keyword settings and build the model; nothing is
     fitted. New code builds an estimator and :meth:`TorqueModel.of
     <.model.TorqueModel.of>` instead."""
@@ -122,7 +132,8 @@ def regrouped_message(model: TorqueModel) -> str:
             f"model")
 
 
-def fit_regressor(setup: Setup, Y, tau, *, warn: bool = True) -> EstimatorFit:
+def fit_regressor(setup: Setup, Y: Float[np.ndarray, "samples n d"],
+                  tau: Float[np.ndarray, "samples n"], *, warn: bool = True) -> EstimatorFit:
     """0.2's form of ``setup.estimator.fit(FitProblem(setup.model, Y, tau, ...))``."""
     return setup.estimator.fit(FitProblem(setup.model, Y, tau, setup.limits, warn))
 

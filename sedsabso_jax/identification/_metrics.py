@@ -25,8 +25,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 from .._output import jsonable
 
@@ -54,7 +57,7 @@ class Metrics:
     n_samples: int
     n_joints: int
 
-    def __getitem__(self, key: str):
+    def __getitem__(self, key: str) -> Any:
         if key not in self.keys():
             raise KeyError(key)
         return getattr(self, key)
@@ -66,7 +69,7 @@ class Metrics:
         """Plain Python values (lists of floats, floats, ints, None for NaN or absent)."""
         return jsonable({key: getattr(self, key) for key in self.keys()})
 
-    def table(self, joint_names=None) -> str:
+    def table(self, joint_names: Sequence[str] | None = None) -> str:
         """A small text table: one line per joint and one for the overall figures."""
         names = list(joint_names) if joint_names is not None else [
             f"joint {j + 1}" for j in range(self.n_joints)]
@@ -113,14 +116,18 @@ def _ratio(num: np.ndarray, den: np.ndarray) -> np.ndarray:
         return np.where(den > 0.0, 100.0 * num / np.where(den > 0.0, den, 1.0), np.nan)
 
 
-def nrms_over_limits(rms, limits) -> np.ndarray:
+def nrms_over_limits(rms: Float[ArrayLike, " n"], limits: Float[ArrayLike, " n"] | Sequence[float]
+                     ) -> Float[np.ndarray, " n"]:
     """Per joint ``100 RMS(e_j) / (2 limit_j)`` [%], the error against the joint's whole
     torque range ``[-limit, +limit]``; its mean over the joints is the figure FloBaRoID
     publishes."""
     return 100.0 * np.asarray(rms, dtype=float) / (2.0 * np.asarray(limits, dtype=float))
 
 
-def validation_metrics(tau_measured, tau_predicted, torque_limits=None) -> Metrics:
+def validation_metrics(tau_measured: Float[ArrayLike, "T ..."],
+                       tau_predicted: Float[ArrayLike, "T ..."],
+                       torque_limits: Float[ArrayLike, " n"] | Sequence[float] | None = None
+                       ) -> Metrics:
     """Compare predicted with measured torques, ``(T, n)`` each (``(T,)``: one joint).
 
     ``torque_limits`` ``(n,)``, positive (e.g. the URDF efforts): adds the NRMS over the

@@ -29,6 +29,7 @@ import functools
 import numbers
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 from ..dynamics._base_parameters import (
     RANK_TOLERANCE,
@@ -37,7 +38,7 @@ from ..dynamics._base_parameters import (
     random_states,
 )
 from ..dynamics._robot import N_LINK_PARAMETERS, Robot
-from ..measurements._transmission import coupled_motors
+from ..measurements._transmission import TransmissionLike, coupled_motors
 
 FRICTION_TERMS = ("viscous-coulomb", "offset", "quadratic", "smooth", "armature", "coupling")
 #: Velocity scale (rad/s or m/s) of the "smooth" Coulomb term tanh(qd / v).
@@ -74,7 +75,8 @@ class TorqueModel:
                              "turns several joints (a coupling)")
 
     @classmethod
-    def of(cls, robot: Robot, friction: str = "viscous-coulomb", *, transmission=None,
+    def of(cls, robot: Robot, friction: str = "viscous-coulomb", *,
+           transmission: TransmissionLike = None,
            smooth_velocity: float = SMOOTH_VELOCITY,
            base: BaseParameters | None = None) -> TorqueModel:
         """The model of ``robot`` with the ``friction`` terms (``"viscous-coulomb"`` plus
@@ -210,13 +212,16 @@ class TorqueModel:
             Y[..., np.arange(n), self._fc_columns()] = np.tanh(qd / self.smooth_velocity)
         return np.concatenate([Y, self._extra_columns(qd, qdd)], -1)
 
-    def regressor(self, q, qd, qdd) -> np.ndarray:
+    def regressor(self, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
+                  qdd: Float[ArrayLike, "*batch n"]) -> Float[np.ndarray, "*batch n d"]:
         """``(..., n, dim)``: the base columns, then the identifiable extra columns."""
         Y = self._full_regressor(q, qd, qdd)
         keep = np.r_[np.arange(self.base.rank), self.base.rank + self._kept]
         return Y[..., keep] if len(keep) < Y.shape[-1] else Y
 
-    def predict(self, values, q, qd, qdd) -> np.ndarray:
+    def predict(self, values: Float[ArrayLike, " d"], q: Float[ArrayLike, "*batch n"],
+                qd: Float[ArrayLike, "*batch n"], qdd: Float[ArrayLike, "*batch n"]
+                ) -> Float[np.ndarray, "*batch n"]:
         """Torques ``regressor(q, qd, qdd) @ values``, ``(..., n)``."""
         values = np.asarray(values, dtype=float)
         if values.shape != (self.dim,):
@@ -234,7 +239,7 @@ class TorqueModel:
         return np.asarray(full)
 
 
-def canonical_friction(friction) -> str:
+def canonical_friction(friction: object) -> str:
     """``friction`` with its terms checked, ``viscous-coulomb`` added, in canonical order."""
     if not isinstance(friction, str) or not friction:
         raise ValueError(f"friction must be a string of terms joined by '+' from "

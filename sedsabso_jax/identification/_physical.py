@@ -33,6 +33,7 @@ import time
 import warnings
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 from ..dynamics._robot import N_LINK_PARAMETERS
 from ..optim._linear import Factorization
@@ -65,7 +66,8 @@ def _inertial_params(J):
             -J[0, 1], -J[0, 2], -J[1, 2], J[3, 3], J[0, 3], J[1, 3], J[2, 3]]
 
 
-def fit_physical(model: TorqueModel, factor: Factorization, prior, prior_weight: float = 0.0,
+def fit_physical(model: TorqueModel, factor: Factorization, prior: Float[ArrayLike, " p"],
+                 prior_weight: float = 0.0,
                  prior_strength: float = 0.0) -> PhysicalFit:
     """Physically consistent least squares (see the module docstring) for ``model``, on the
     data factored in ``factor`` (``factorize(W, b)`` of the weighted stacked regressor and

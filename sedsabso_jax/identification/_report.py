@@ -5,17 +5,34 @@ from __future__ import annotations
 
 import dataclasses
 import os
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
-from .._output import jsonable, markdown_table, pyplot, save_figure, write_json, write_text
+from .._output import (
+    PathLike,
+    jsonable,
+    markdown_table,
+    pyplot,
+    save_figure,
+    write_json,
+    write_text,
+)
 from ..measurements._container import Measurements
+from ._fitting import Limits
 from ._identify import Identification
 from ._metrics import Metrics, validation_metrics
 from ._validation import CrossValidation, PriorSelection, Selection
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
-def figure_torques(times, tau_measured, tau_predicted, joint_names, title: str):
+
+def figure_torques(times: Float[ArrayLike, " T"], tau_measured: Float[ArrayLike, "T n"],
+                   tau_predicted: Float[ArrayLike, "T n"], joint_names: Sequence[str],
+                   title: str) -> Figure:
     """Measured against predicted torque per joint (one panel each), error in the legend."""
     plt = pyplot()
     tau_measured, tau_predicted = np.asarray(tau_measured), np.asarray(tau_predicted)
@@ -52,7 +69,7 @@ class IdentificationReport:
     ident: Identification
     data: Measurements
     held_out: Measurements | None
-    limits: np.ndarray | None
+    limits: Limits
     fit: Metrics
     validation: Metrics | None
     predicted: tuple[np.ndarray, np.ndarray | None]
@@ -61,17 +78,19 @@ class IdentificationReport:
     prior_selection: PriorSelection | None = None
 
     @classmethod
-    def evaluate(cls, ident: Identification, data, held_out=None, limits=None, *,
-                 cross_validation=None, selection=None, prior_selection=None
-                 ) -> IdentificationReport:
+    def evaluate(cls, ident: Identification, data: Measurements,
+                 held_out: Measurements | None = None, limits: Limits = None, *,
+                 cross_validation: CrossValidation | None = None,
+                 selection: Selection | None = None,
+                 prior_selection: PriorSelection | None = None) -> IdentificationReport:
         """Predict the torques of ``data`` (and ``held_out``) and compare."""
         fit_pred = ident.predict(data.q, data.qd, data.qdd)
         val_pred = None if held_out is None else ident.predict(held_out.q, held_out.qd,
                                                               held_out.qdd)
         return cls(ident, data, held_out, limits,
                    validation_metrics(data.tau, fit_pred, limits),
-                   None if held_out is None else validation_metrics(held_out.tau, val_pred,
-                                                                    limits),
+                   None if held_out is None else validation_metrics(
+                       held_out.tau, val_pred, limits),  # type: ignore[arg-type]
                    (fit_pred, val_pred), cross_validation, selection, prior_selection)
 
     def text(self) -> str:
@@ -136,11 +155,13 @@ class IdentificationReport:
         if self.held_out is not None:
             sets.append(("torques_validation.png", self.held_out, self.predicted[1],
                          "held-out data"))
-        return {name: figure_torques(d.times, d.tau, pred, robot.joint_names,
-                                     f"{robot.name}, {ident.method}: {label}")
+        # pred is None only for held-out data, which is then not in sets
+        return {name: figure_torques(d.times, d.tau, pred,  # type: ignore[arg-type]
+                                     robot.joint_names, f"{robot.name}, {ident.method}: {label}")
                 for name, d, pred, label in sets}
 
-    def write(self, settings: dict, out_dir=None, json_path=None, urdf_path=None
+    def write(self, settings: dict, out_dir: PathLike | None = None,
+              json_path: PathLike | None = None, urdf_path: PathLike | None = None
               ) -> list[str]:
         """Write the figures and ``identification.json`` into ``out_dir`` (created if
         missing), the JSON also to ``json_path`` and the identified robot's URDF to

@@ -33,14 +33,18 @@ tau, **identify_settings)`` keep working through 0.3.x with a ``DeprecationWarni
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable, Iterable
+from typing import Any
 
 import numpy as np
+from jaxtyping import ArrayLike, Int
 
 from .. import _deprecation
-from ..dynamics._base_parameters import base_parameters
-from ..measurements._transmission import coupled_motors
+from ..dynamics._base_parameters import BaseParameters, base_parameters
+from ..dynamics._robot import Robot
+from ..measurements._transmission import TransmissionLike, coupled_motors
 from ._estimators import OLS, WLS, PhysicallyConsistent
-from ._fitting import Estimator, per_joint
+from ._fitting import Estimator, Limits, Sigma, per_joint
 from ._folds import DEFAULT_FOLDS as DEFAULT_FOLDS
 from ._folds import REPEAT_CORRELATION as REPEAT_CORRELATION
 from ._folds import TIE_FRACTION as TIE_FRACTION
@@ -48,7 +52,7 @@ from ._folds import CrossValidation as CrossValidation
 from ._folds import cross_validation_of, fold_labels, not_worse
 from ._folds import phase_folds as phase_folds
 from ._folds import repeat_period as repeat_period
-from ._identify import data_arrays, torque_model
+from ._identify import Data, data_arrays, torque_model
 from ._legacy import estimator_from, from_keywords
 from ._model import SMOOTH_VELOCITY, TorqueModel
 
@@ -85,9 +89,11 @@ def _recording(robot, data, folds):
     return (q, qd, qdd, tau), labels, period
 
 
-def cross_validate(robot, data, estimator: Estimator = OLS(), model=None, *old_args,
-                   folds=DEFAULT_FOLDS, limits=None, transmission=None, base=None,
-                   smooth_velocity: float = SMOOTH_VELOCITY, **old_keywords
+def cross_validate(robot: Robot, data: Data, estimator: Estimator = OLS(),
+                   model: TorqueModel | str | None = None, *old_args: Any,
+                   folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS, limits: Limits = None,
+                   transmission: TransmissionLike = None, base: BaseParameters | None = None,
+                   smooth_velocity: float = SMOOTH_VELOCITY, **old_keywords: Any
                    ) -> CrossValidation:
     """Cross-validate :func:`~._identify.identify` ``(robot, data, estimator, model)`` over
     ``folds`` phase folds of the recording (module docstring), or over given fold labels
@@ -162,10 +168,15 @@ class Selection:
                 "candidates": [{"settings": s, **cv.as_dict()} for s, cv in self.candidates]}
 
 
-def select_model(robot, data, *old_args, estimators=None, frictions=None,
-                 folds=DEFAULT_FOLDS, limits=None, transmission=None, base=None,
-                 smooth_velocity: float = SMOOTH_VELOCITY, progress=None, weightings=None,
-                 **old_keywords) -> Selection:
+def select_model(robot: Robot, data: Data, *old_args: Any,
+                 estimators: Estimator | Iterable[Estimator] | None = None,
+                 frictions: str | TorqueModel | Iterable[str | TorqueModel] | None = None,
+                 folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS, limits: Limits = None,
+                 transmission: TransmissionLike = None, base: BaseParameters | None = None,
+                 smooth_velocity: float = SMOOTH_VELOCITY,
+                 progress: Callable[[str, int, int], object] | None = None,
+                 weightings: Iterable[tuple[str, Sigma]] | None = None,
+                 **old_keywords: Any) -> Selection:
     """Choose the torque model and the estimator by cross-validation (module docstring).
 
     ``estimators`` (default :data:`ESTIMATOR_CANDIDATES`; those weighting by the torque
@@ -193,7 +204,7 @@ def select_model(robot, data, *old_args, estimators=None, frictions=None,
         raise ValueError("select_model needs at least one friction model and one estimator")
     for e in estimators:
         _check_estimator(e)
-    K = getattr(transmission, "matrix", transmission)
+    K: Any = getattr(transmission, "matrix", transmission)
     coupled = K is not None and bool(coupled_motors(K))
     (q, qd, qdd, tau), labels, period = _recording(robot, data, folds)
     if base is None:  # computed once for every candidate
@@ -259,10 +270,14 @@ class PriorSelection:
                                for s, cv in self.candidates]}
 
 
-def choose_prior_strength(robot, data, estimator: Estimator = PhysicallyConsistent(),
-                          model=None, *old_args, strengths=PRIOR_STRENGTHS,
-                          folds=DEFAULT_FOLDS, limits=None, transmission=None, base=None,
-                          smooth_velocity: float = SMOOTH_VELOCITY, **old_keywords
+def choose_prior_strength(robot: Robot, data: Data,
+                          estimator: Estimator = PhysicallyConsistent(),
+                          model: TorqueModel | str | None = None, *old_args: Any,
+                          strengths: Iterable[float] = PRIOR_STRENGTHS,
+                          folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS, limits: Limits = None,
+                          transmission: TransmissionLike = None,
+                          base: BaseParameters | None = None,
+                          smooth_velocity: float = SMOOTH_VELOCITY, **old_keywords: Any
                           ) -> PriorSelection:
     """Choose how strongly a physically consistent fit is pulled toward the a-priori
     parameters (``prior_strength`` of :class:`~._estimators.PhysicallyConsistent`; an

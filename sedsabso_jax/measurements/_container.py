@@ -20,7 +20,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from jaxtyping import ArrayLike
 
+from .._output import PathLike
 from . import _formats as formats
 from ._signal import median_rate
 
@@ -28,7 +30,7 @@ from ._signal import median_rate
 ATTRIBUTES = {"positions": "q", "velocities": "qd", "accelerations": "qdd", "torques": "tau"}
 
 
-def as_float(source: str, field: str, value, ndim: int) -> np.ndarray:
+def as_float(source: str, field: str, value: ArrayLike, ndim: int) -> np.ndarray:
     """``value`` as a float64 array of ``ndim`` dimensions, or a ValueError naming it."""
     try:
         arr = np.asarray(value)
@@ -189,7 +191,7 @@ class Measurements:
         return {"times": self.times, "positions": self.q, "velocities": self.qd,
                 "accelerations": self.qdd, "torques": self.tau}
 
-    def save(self, path) -> Path:
+    def save(self, path: PathLike) -> Path:
         """Write to ``path``: ``.npz`` (keys :data:`._formats.NPZ_KEYS`) or ``.csv``
         (header ``time,q1..qn,qd1..qdn,qdd1..qddn,tau1..taun``, 17 significant digits).
 
@@ -200,7 +202,7 @@ class Measurements:
         return formats.write(path, self.arrays())
 
 
-def positive_int(label: str, value) -> int:
+def positive_int(label: str, value: object) -> int:
     """``value`` as an int, or a ValueError naming ``label`` unless it is an integer >= 1."""
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
         raise ValueError(f"{label} must be an integer >= 1, got {value!r}")

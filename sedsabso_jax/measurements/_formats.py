@@ -26,11 +26,11 @@ import io
 import re
 import zipfile
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 
-from .._output import atomic_write
+from .._output import PathLike, atomic_write
 
 #: .npz keys, in the order written; times, positions and torques are required to read.
 NPZ_KEYS = ("times", "positions", "velocities", "accelerations", "torques")
@@ -188,7 +188,7 @@ def read_csv(path: Path, source: str, n_joints: int | None) -> tuple[dict, dict]
     return fields, ({"ignored_columns": ignored} if ignored else {})
 
 
-def write(path, arrays: dict[str, np.ndarray]) -> Path:
+def write(path: PathLike, arrays: dict[str, np.ndarray]) -> Path:
     """Write ``arrays`` (keys :data:`NPZ_KEYS`) to ``path`` atomically: ``.npz``, or
     ``.csv`` with a header ``time,q1..qn,qd1..qdn,qdd1..qddn,tau1..taun`` and 17
     significant digits (what :func:`read_csv` reads back exactly)."""
@@ -201,7 +201,7 @@ def write(path, arrays: dict[str, np.ndarray]) -> Path:
         header = ["time"] + [f"{CSV_PREFIXES[k]}{j + 1}" for k in NPZ_KEYS[1:] for j in range(n)]
         data = np.column_stack([arrays[k] for k in NPZ_KEYS])
 
-        def write_csv(f):
+        def write_csv(f: BinaryIO) -> None:
             text = io.StringIO()
             np.savetxt(text, data, delimiter=",", header=",".join(header), comments="",
                        fmt="%.17g")

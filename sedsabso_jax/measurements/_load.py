@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from .._output import PathLike
 from . import _formats as formats
 from ._container import Measurements, check_fields, positive_int
 from ._signal import (
@@ -19,8 +21,9 @@ from ._signal import (
 )
 
 
-def load_measurements(path, *, n_joints: int | None = None, cutoff_hz: float | None = None,
-                      filter_torques: bool = False, downsample: int = 1,
+def load_measurements(path: PathLike, *, n_joints: int | None = None,
+                      cutoff_hz: float | None = None, filter_torques: bool = False,
+                      downsample: int = 1,
                       derive: bool = False, trim_edges: bool = True,
                       resample_hz: float | None = None) -> Measurements:
     """Read measurements from a ``.npz`` or ``.csv`` file (formats: :mod:`._formats`).
@@ -127,7 +130,7 @@ def _resample(fields: dict, rate_hz, source: str) -> dict:
     return out
 
 
-def load_kuka_lwr4(run: int = 1, **kwargs) -> Measurements:
+def load_kuka_lwr4(run: int = 1, **kwargs: Any) -> Measurements:
     """FloBaRoID's real KUKA LWR4+ recording ``run`` (1 or 2), shipped with the package
     (``data/kuka_lwr4/measurements_<run>.npz``, LGPL-3.0; see its SOURCE.md). Keyword
     arguments go to :func:`load_measurements`."""

@@ -19,6 +19,7 @@ derived accelerations ring for about ``2 / cutoff_hz`` seconds there (0.2 s at 1
 from __future__ import annotations
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 #: Default low-pass cutoff [Hz] for deriving velocities/accelerations and filtering torques.
 DEFAULT_CUTOFF_HZ = 10.0
@@ -26,7 +27,7 @@ DEFAULT_CUTOFF_HZ = 10.0
 BUTTERWORTH_ORDER = 4
 
 
-def median_rate(times) -> float:
+def median_rate(times: Float[ArrayLike, " T"]) -> float:
     """Median sample rate [Hz] of strictly increasing time stamps ``(T,)``."""
     times = np.asarray(times, dtype=float)
     return float(1.0 / np.median(np.diff(times)))
@@ -46,8 +47,9 @@ def check_cutoff(cutoff_hz: float, rate: float, source: str) -> float:
     return cutoff
 
 
-def lowpass(x, rate: float, cutoff_hz: float = DEFAULT_CUTOFF_HZ, *,
-            order: int = BUTTERWORTH_ORDER, source: str = "lowpass") -> np.ndarray:
+def lowpass(x: Float[ArrayLike, "T ..."], rate: float,
+            cutoff_hz: float = DEFAULT_CUTOFF_HZ, *, order: int = BUTTERWORTH_ORDER,
+            source: str = "lowpass") -> Float[np.ndarray, "T ..."]:
     """Zero-phase Butterworth low-pass of ``x`` along axis 0 (``scipy.signal.sosfiltfilt``).
 
     ``rate`` is the sample rate [Hz] the filter is designed for; ``cutoff_hz`` must lie
@@ -80,8 +82,9 @@ def edge_seconds(cutoff_hz: float) -> float:
     return 2.0 / float(cutoff_hz)
 
 
-def differentiate(times, q, cutoff_hz: float | None = DEFAULT_CUTOFF_HZ, *,
-                  source: str = "differentiate") -> tuple[np.ndarray, np.ndarray]:
+def differentiate(times: Float[ArrayLike, " T"], q: Float[ArrayLike, "T n"],
+                  cutoff_hz: float | None = DEFAULT_CUTOFF_HZ, *, source: str = "differentiate"
+                  ) -> tuple[Float[np.ndarray, "T n"], Float[np.ndarray, "T n"]]:
     """Velocities and accelerations ``(qd, qdd)`` from positions ``q (T, n)``.
 
     ``q`` is low-passed with :func:`lowpass` at ``cutoff_hz`` (``None``: not filtered),

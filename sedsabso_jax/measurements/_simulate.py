@@ -3,9 +3,14 @@ outliers."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 from ..dynamics._regressor import inverse_dynamics
+from ..dynamics._robot import Robot
 from ._container import Measurements, check_fields
 
 #: Default size of a simulated outlier, in multiples of the joint's RMS torque.
@@ -23,7 +28,9 @@ def _nonnegative(label: str, value, upper: float | None = None) -> float:
     return value
 
 
-def simulate_measurements(robot, q, qd, qdd, times, *, params=None, torque_noise: float = 0.0,
+def simulate_measurements(robot: Robot, q: Float[ArrayLike, "T n"], qd: Float[ArrayLike, "T n"],
+                          qdd: Float[ArrayLike, "T n"], times: Float[ArrayLike, " T"], *,
+                          params: Float[ArrayLike, " p"] | None = None, torque_noise: float = 0.0,
                           position_noise: float = 0.0, outlier_fraction: float = 0.0,
                           outlier_scale: float = DEFAULT_OUTLIER_SCALE,
                           seed: int | None = 0) -> Measurements:
@@ -80,7 +87,12 @@ def simulate_measurements(robot, q, qd, qdd, times, *, params=None, torque_noise
     return Measurements(fields["times"], q_recorded, qd, qdd, tau, source=source, info=info)
 
 
-def simulate_measurements_along(robot, trajectory, times, **kwargs) -> Measurements:
+def simulate_measurements_along(
+        robot: Robot,
+        trajectory: Callable[[Float[np.ndarray, " T"]],
+                             tuple[Float[ArrayLike, "T n"], Float[ArrayLike, "T n"],
+                                   Float[ArrayLike, "T n"]]],
+        times: Float[ArrayLike, " T"], **kwargs: Any) -> Measurements:
     """:func:`simulate_measurements` along ``trajectory``, a callable called once with the
     whole ``times`` array and returning ``(q, qd, qdd)``, each ``(T, n)``."""
     times = np.asarray(times, dtype=float)

@@ -21,13 +21,16 @@ terms).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping, Sequence
+from typing import TypeAlias
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 from ._container import Measurements
 
 
-def coupled_motors(K) -> tuple[int, ...]:
+def coupled_motors(K: Float[ArrayLike, "n n"]) -> tuple[int, ...]:
     """The motors (0-based rows of the transmission matrix ``K``) that turn with more than
     one joint."""
     return tuple(int(m) for m in np.flatnonzero(np.count_nonzero(np.asarray(K), axis=1) > 1))
@@ -79,8 +82,11 @@ class Transmission:
                 "drive gains", self.drive_gains, n, nonzero=True))
 
     @classmethod
-    def from_gear_ratios(cls, ratios, *, coupling=None, offset=None,
-                         drive_gains=None) -> Transmission:
+    def from_gear_ratios(cls, ratios: Float[ArrayLike, " n"] | Sequence[float], *,
+                         coupling: Mapping[tuple[int, int], float] | None = None,
+                         offset: Float[ArrayLike, " n"] | Sequence[float] | None = None,
+                         drive_gains: Float[ArrayLike, " n"] | Sequence[float] | None = None
+                         ) -> Transmission:
         """``K = diag(ratios)`` plus ``coupling``: ``{(motor, joint): ratio}`` with motors
         and joints numbered from 1, e.g. ``{(6, 5): 32.0}`` for the TX40's wrist."""
         N = np.atleast_1d(np.asarray(ratios, dtype=float))
@@ -96,7 +102,8 @@ class Transmission:
                 raise ValueError(f"coupling ({motor}, {joint}): expected a motor and another "
                                  f"joint, both numbered 1..{n}")
             K[int(motor) - 1, int(joint) - 1] = float(value)
-        return cls(K, np.zeros(n) if offset is None else offset, drive_gains)
+        # offset and drive_gains may be array-likes: __post_init__ converts them
+        return cls(K, np.zeros(n) if offset is None else offset, drive_gains)  # type: ignore[arg-type]
 
     @property
     def n_joints(self) -> int:
@@ -121,3 +128,8 @@ class Transmission:
         return Measurements(data.times, data.q @ Kinv_T - self.offset, data.qd @ Kinv_T,
                             data.qdd @ Kinv_T, tau_m @ self.matrix, source=data.source,
                             info=info)
+
+
+#: A transmission as the identification takes it: a :class:`Transmission`, its matrix ``K``
+#: ``(n, n)``, or None (none: ``K = 1``).
+TransmissionLike: TypeAlias = Transmission | Float[ArrayLike, "n n"] | None

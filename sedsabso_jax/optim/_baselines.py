@@ -19,16 +19,21 @@ from __future__ import annotations
 import functools
 import time
 import warnings
+from typing import Any, TypeAlias
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
+from jaxtyping import Array, ArrayLike, Float, Int
 
 from .. import _x64
 from ._fitness import L1Residual
 from ._linear import factorize, l1_solve
 from ._result import Result
+
+#: An identification problem: Eq. 17 as an :class:`~sedsabso_jax.L1Residual` or ``(W, tau)``.
+L1Problem: TypeAlias = L1Residual | tuple[ArrayLike, ArrayLike]
 
 _SOLVERS = {"LM": optx.LevenbergMarquardt, "GN": optx.GaussNewton}
 
@@ -52,7 +57,7 @@ def _result(method, problem, x, n_evaluations=0, compile_s=0.0, run_s=0.0) -> Re
     )
 
 
-def ols(problem) -> Result:
+def ols(problem: L1Problem) -> Result:
     """Ordinary least squares ``argmin ||W x - tau||_2`` (method ``"OLS"``), by the
     column-pivoted QR of :func:`._linear.factorize`. If ``W`` is rank deficient or poorly
     conditioned (judged on unit-norm columns), warns with the condition number and the
@@ -77,9 +82,10 @@ def _compiled(method, rtol, atol, max_steps, shape):
     with the same configuration reports ``compile_s = 0``."""
     solver = _SOLVERS[method](rtol=rtol, atol=atol)
 
-    def solve(W, tau, x0):
-        sol = optx.least_squares(_residual, solver, x0, (W, tau), max_steps=max_steps,
-                                 throw=False)
+    def solve(W: Float[Array, "m d"], tau: Float[Array, " m"], x0: Float[Array, " d"]
+              ) -> tuple[Float[Array, " d"], Any, Int[Array, ""]]:
+        sol: optx.Solution = optx.least_squares(_residual, solver, x0, (W, tau),
+                                                max_steps=max_steps, throw=False)
         return sol.value, sol.result, sol.stats["num_steps"]
 
     m, d = shape
@@ -87,7 +93,8 @@ def _compiled(method, rtol, atol, max_steps, shape):
     return jax.jit(solve).lower(W, tau, x0).compile()
 
 
-def least_squares(problem, method: str = "LM", x0=None, max_steps: int = 256,
+def least_squares(problem: L1Problem, method: str = "LM", x0: Float[ArrayLike, " d"] | None = None,
+                  max_steps: int = 256,
                   rtol: float = 1e-10, atol: float = 1e-10) -> Result:
     """``argmin ||W x - tau||_2`` by optimistix's Levenberg-Marquardt (``method="LM"``) or
     Gauss-Newton (``"GN"``) from ``x0`` (default zeros). Warns if the solver stops without
@@ -122,7 +129,7 @@ def least_squares(problem, method: str = "LM", x0=None, max_steps: int = 256,
     return _result(method, problem, x, int(n_steps), compile_s, run_s)
 
 
-def l1_optimum(problem) -> Result:
+def l1_optimum(problem: L1Problem) -> Result:
     """The exact minimiser of Eq. 17 (method ``"L1-LP"``) by linear programming
     (:func:`._linear.l1_solve`: the dual LP with HiGHS, polished at its vertex).
     ``n_evaluations`` is HiGHS's iteration count. Raises ``RuntimeError`` with HiGHS's
@@ -134,7 +141,8 @@ def l1_optimum(problem) -> Result:
     return _result("L1-LP", problem, x, nit, run_s=time.perf_counter() - t0)
 
 
-def gap_to_optimum(result_f, l1_f, scale: float = 0.0):
+def gap_to_optimum(result_f: Float[ArrayLike, "*shape"], l1_f: Float[ArrayLike, "*shape"],
+                   scale: float = 0.0) -> float | Float[np.ndarray, "*shape"]:
     """Relative gap ``(f - f_opt) / max(f_opt, 1e-9 scale)`` of a fitness ``result_f``
     above the L1 optimum ``l1_f`` (from :func:`l1_optimum`); 0 at the optimum. ``scale``:
     the size of the data, e.g. ``sum |tau|``: on noise-free data ``f_opt`` is rounding

@@ -12,9 +12,12 @@ near zero searchable.
 from __future__ import annotations
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 
-def check_bounds(lower, upper, dim=None) -> tuple[np.ndarray, np.ndarray]:
+def check_bounds(lower: Float[ArrayLike, " d"], upper: Float[ArrayLike, " d"],
+                 dim: int | None = None
+                 ) -> tuple[Float[np.ndarray, " d"], Float[np.ndarray, " d"]]:
     """``(lower, upper)`` as float arrays after checking them: 1-D, one length (``dim``
     if given), finite, ``lower < upper`` everywhere."""
     lower = np.asarray(lower, dtype=float)
@@ -34,7 +37,8 @@ def check_bounds(lower, upper, dim=None) -> tuple[np.ndarray, np.ndarray]:
     return lower, upper
 
 
-def box_around(centre, fraction: float, floor: float) -> tuple[np.ndarray, np.ndarray]:
+def box_around(centre: Float[ArrayLike, " d"], fraction: float, floor: float
+               ) -> tuple[Float[np.ndarray, " d"], Float[np.ndarray, " d"]]:
     """``(lower, upper) = centre -+ max(fraction |centre|, floor)``; ``fraction, floor >= 0``
     and not both 0, ``centre`` finite."""
     fraction, floor = float(fraction), float(floor)

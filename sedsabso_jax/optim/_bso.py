@@ -25,10 +25,15 @@ constant population, :class:`~sedsabso_jax.SEDSABSO` adds annealing and a shrink
 
 from __future__ import annotations
 
+from typing import Any
+
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float, Int
 
-from ._solver import is_concrete
+from ._fitness import Fitness
+from ._solver import Bounds, is_concrete
 from ._swarm import (
     AbstractSwarm,
     SwarmState,
@@ -62,7 +67,8 @@ class BeetleSwarm(AbstractSwarm):
         if self.delta <= 0 or self.c <= 0:
             raise ValueError(f"delta and c must be > 0, got delta={self.delta}, c={self.c}")
 
-    def evaluations(self, n_active):
+    def evaluations(self, n_active: int | Int[np.ndarray, " t"]
+                    ) -> int | Int[np.ndarray, " t"]:
         """Three per beetle: its new position and its two antennae (Eq. 12)."""
         return 3 * n_active
 
@@ -73,7 +79,8 @@ class BeetleSwarm(AbstractSwarm):
         d = self.delta / self.c
         return 0.5 * d
 
-    def move(self, s: SwarmState, draws, lower, upper):
+    def move(self, s: SwarmState, draws: Any, lower: Bounds, upper: Bounds
+             ) -> tuple[Float[Array, "slots d"], Float[Array, "slots d"]]:
         """Eq. 10-13 for every slot with ``draws`` the uniforms ``(r1, r2)`` of Eq. 11
         (stacked or not): the antenna difference ``f(xl) - f(xr)`` at the current
         positions is the state's (computed with their fitness)."""
@@ -87,7 +94,10 @@ class BeetleSwarm(AbstractSwarm):
         v = jnp.clip(v, -vmax, vmax)
         return jnp.clip(s.x + self.lam * v + (1.0 - self.lam) * xi, lower, upper), v
 
-    def absorb_beetles(self, s: SwarmState, raw, diff, diff_bad):
+    def absorb_beetles(self, s: SwarmState, raw: Float[Array, " slots"],
+                       diff: Float[Array, " slots"] | None,
+                       diff_bad: Int[Array, " slots"] | None
+                       ) -> tuple[SwarmState, tuple[Float[Array, " d"], Float[Array, ""]]]:
         """The moved beetles' fitness and antennae taken in: personal and best-ever
         updated; returns the state and the swarm's global best ``(x, f)`` among the active
         slots (the guide is the subclass's)."""
@@ -99,7 +109,9 @@ class BeetleSwarm(AbstractSwarm):
             (diff, diff_bad, s.n_evaluations + 3 * n_active, bad))
         return update_bests(s, s.x, f)
 
-    def beetle_step(self, fitness, s: SwarmState, lower, upper, r1, r2):
+    def beetle_step(self, fitness: Fitness, s: SwarmState, lower: Bounds, upper: Bounds,
+                    r1: Float[Array, "slots d"], r2: Float[Array, "slots d"]
+                    ) -> tuple[SwarmState, tuple[Float[Array, " d"], Float[Array, ""]]]:
         """Eq. 10-13 for every slot, with ``r1, r2`` the uniform draws of Eq. 11; returns
         the state with bests updated and the swarm's global best (x, f) among the active
         slots."""
@@ -127,6 +139,8 @@ class BSO(BeetleSwarm):
     def n_slots(self) -> int:
         return self.n_beetles
 
-    def absorb(self, s: SwarmState, raw, diff, diff_bad) -> SwarmState:
+    def absorb(self, s: SwarmState, raw: Float[Array, " slots"],
+               diff: Float[Array, " slots"] | None, diff_bad: Int[Array, " slots"] | None
+               ) -> SwarmState:
         s, (gx, gf) = self.absorb_beetles(s, raw, diff, diff_bad)
         return eqx.tree_at(lambda s: (s.guide_x, s.guide_f), s, (gx, gf))

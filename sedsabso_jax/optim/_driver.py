@@ -14,15 +14,18 @@ import dataclasses
 import math
 import os
 import time
+from typing import Any, Literal
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.typing import DTypeLike
+from jaxtyping import Array, ArrayLike, Float, Int, PRNGKeyArray
 
 from .. import _x64
 from ._box import check_bounds
-from ._fitness import as_fitness
+from ._fitness import Fitness, FitnessLike, as_fitness
 from ._result import Result
 from ._solver import AbstractSolver
 from ._swarm import PREDRAW
@@ -68,7 +71,7 @@ def _run_many(static, solver_dyn, fitness, lower, upper, keys, n_runs) -> Result
     if batch > 1:
         return jax.lax.map(one, keys, batch_size=batch)  # chunks of vmapped runs
 
-    def body(i, out):
+    def body(i: Int[Array, ""], out: Result) -> Result:
         return jax.tree.map(lambda o, r: o.at[i].set(r), out, one(keys[i]))
 
     shapes = jax.eval_shape(one, keys[0])
@@ -95,10 +98,10 @@ def _batching(batch, runs: int, sharded: bool, run_bytes: tuple[int, int] = (0, 
     need = lambda k: k * flight + per_device * out  # noqa: E731
     fits = lambda k: limit is None or need(k) <= limit  # noqa: E731
 
-    def too_big(k, what):
+    def too_big(k: int, what: str) -> ValueError:
         return ValueError(
             f"{what}: {per_device} run(s) with {k} in flight need about "
-            f"{need(k) / 2**30:.3g} GiB, more than the limit of {limit / 2**30:.3g} GiB "
+            f"{need(k) / 2**30:.3g} GiB, more than the limit of {limit / 2**30:.3g} GiB "  # type: ignore[operator]
             f"({where}); use fewer runs or a smaller batch=k")
 
     if batch == "auto":
@@ -123,7 +126,7 @@ def _batching(batch, runs: int, sharded: bool, run_bytes: tuple[int, int] = (0, 
     raise ValueError(f"batch must be 'auto', 'vmap' or an integer >= 1, got {batch!r}")
 
 
-def memory_limit(device) -> tuple[int | None, str]:
+def memory_limit(device: jax.Device) -> tuple[int | None, str]:
     """``(bytes, what)``: how much memory runs in flight may take on ``device``: half of
     its memory (``memory_stats()["bytes_limit"]`` on a GPU or TPU; the machine's RAM for
     the CPU), the rest left to XLA's own buffers and everything else. ``None`` when
@@ -142,7 +145,7 @@ def memory_limit(device) -> tuple[int | None, str]:
     return total // 2, f"{what}, {total / 2**30:.3g} GiB"
 
 
-def run_bytes(solver: AbstractSolver, fitness, dim: int, dtype, iterations: int
+def run_bytes(solver: AbstractSolver, fitness: Fitness, dim: int, dtype: DTypeLike, iterations: int
               ) -> tuple[int, int]:
     """Upper estimates, in bytes, of ``(one run's memory while in flight, its output)``:
     the population's arrays of the fitness's size (Eq. 17: members x m residuals, about
@@ -203,7 +206,7 @@ def _prepare(fitness, solver, lower, upper, key, iterations, runs, args, dtype, 
     return _run_many, static_key, (dyn, fitness, lo, hi, keys, jnp.int32(runs))
 
 
-def under_trace(*trees) -> bool:
+def under_trace(*trees: Any) -> bool:
     """Whether the call is being traced by a caller's transformation: an argument is a
     tracer (``vmap``, ``grad``, ``jit``) or a new array is one (inside ``jit``)."""
     if any(isinstance(x, jax.core.Tracer) for x in jax.tree.leaves(trees)):
@@ -224,7 +227,7 @@ def _traced(fitness, solver, lower, upper, key, iterations, runs, args, dtype, b
     fitness, solver = _cast_all(dtype, fitness, solver)
     iterations = int(iterations)
 
-    def one(k):
+    def one(k: PRNGKeyArray) -> Result:
         return solver.run(fitness, lo, hi, k, iterations)
 
     if runs is None:
@@ -237,8 +240,10 @@ def _traced(fitness, solver, lower, upper, key, iterations, runs, args, dtype, b
     return jax.lax.map(one, keys, batch_size=batch if batch > 1 else None)
 
 
-def time_one_of_many(fitness, solver: AbstractSolver, lower, upper, *, key, iterations: int,
-                     runs: int, dtype=None) -> tuple[float, float]:
+def time_one_of_many(fitness: FitnessLike, solver: AbstractSolver,
+                     lower: Float[ArrayLike, " d"], upper: Float[ArrayLike, " d"], *,
+                     key: PRNGKeyArray, iterations: int, runs: int,
+                     dtype: DTypeLike | None = None) -> tuple[float, float]:
     """``(compile_s, run_s)``: the wall time of ONE run through the executable that
     ``minimise(..., runs=runs)`` uses, where that executable runs in sequence (a single
     CPU device), so timing one run costs no compilation of its own; elsewhere the
@@ -256,9 +261,10 @@ def time_one_of_many(fitness, solver: AbstractSolver, lower, upper, *, key, iter
     return compile_s, time.perf_counter() - t0
 
 
-def minimise(fitness, solver: AbstractSolver, lower, upper, *, key, iterations: int = 600,
-             runs: int | None = None, args=None, dtype=None, shard: bool = True,
-             batch="auto") -> Result:
+def minimise(fitness: FitnessLike, solver: AbstractSolver, lower: Float[ArrayLike, " d"],
+             upper: Float[ArrayLike, " d"], *, key: PRNGKeyArray, iterations: int = 600,
+             runs: int | None = None, args: Any = None, dtype: DTypeLike | None = None,
+             shard: bool = True, batch: Literal["auto", "vmap"] | int = "auto") -> Result:
     """Minimise ``fitness`` over the box ``[lower, upper]`` with ``solver`` (a swarm,
     an :class:`~._external.Evosax` strategy, any :class:`~._solver.AbstractSolver`).
 
@@ -276,9 +282,13 @@ def minimise(fitness, solver: AbstractSolver, lower, upper, *, key, iterations: 
         dtype: float64 or float32 for positions and the fitness data; None: float64 in
             JAX's 64-bit mode, else float32.
         shard: spread the runs over the available devices.
-        batch: how the runs share the call (:func:`_batching`): ``"auto"``, ``"vmap"`` or
-            a chunk size for ``lax.map``; every choice gives the same numbers up to
-            rounding.
+        batch: how the runs share the call: ``"vmap"`` (all at once), an integer k
+            (``lax.map`` over chunks of k vmapped runs) or ``"auto"``: in sequence on a
+            single CPU device (fastest to compile, and one run can be timed through the
+            same executable), otherwise vmapped, in the largest chunks that fit half the
+            device's memory when all at once would not; every choice gives the same
+            numbers up to rounding. Runs that do not fit are a ValueError naming the
+            limit, raised before anything compiles.
 
     Called from Python, the run is compiled ahead of time once per configuration and
     cached, and :attr:`~._result.Result.compile_s` and ``run_s`` time it. Called inside

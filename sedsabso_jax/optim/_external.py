@@ -31,10 +31,10 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float, Int
+from jaxtyping import Array, ArrayLike, Float, Int, PRNGKeyArray
 
 from ._fitness import finite_or_inf
-from ._solver import AbstractSolver
+from ._solver import AbstractSolver, Bounds
 from ._swarm import check_population
 
 #: Strategies whose default population is CMA-ES's ``4 + floor(3 ln d)`` (Hansen's rule)
@@ -162,7 +162,8 @@ class Evosax(AbstractSolver):
         return jax.tree.map(lambda a: a.astype(dtype) if jnp.issubdtype(
             jnp.result_type(a), jnp.floating) else a, tree)
 
-    def start(self, lower, upper, key, iterations: int) -> EvosaxState:
+    def start(self, lower: Bounds, upper: Bounds, key: PRNGKeyArray, iterations: int
+              ) -> EvosaxState:
         """Distribution-based: the strategy's mean drawn uniformly in the box (nothing to
         evaluate). Population-based: the initial population drawn, to be asked for."""
         dim, dtype = lower.shape[0], lower.dtype
@@ -181,7 +182,8 @@ class Evosax(AbstractSolver):
                            n_evaluations=jnp.int32(0), k_init=k_init, stage="start",
                            pending=u0, **common)
 
-    def ask(self, state: EvosaxState, lower, upper):
+    def ask(self, state: EvosaxState, lower: Bounds, upper: Bounds
+            ) -> tuple[Float[Array, "k d"], EvosaxState]:
         if state.stage == "start":
             u = state.pending
             return lower + (upper - lower) * u, dataclasses.replace(state, stage="started")
@@ -195,7 +197,8 @@ class Evosax(AbstractSolver):
         return lower + (upper - lower) * u, dataclasses.replace(
             state, strategy=s, stage="tell", pending=u)
 
-    def tell(self, state: EvosaxState, fitness_values, lower, upper) -> EvosaxState:
+    def tell(self, state: EvosaxState, fitness_values: Float[ArrayLike, " k"], lower: Bounds,
+             upper: Bounds) -> EvosaxState:
         dim, dtype = lower.shape[0], lower.dtype
         u = state.pending
         if state.stage not in ("started", "tell"):
@@ -224,7 +227,7 @@ class Evosax(AbstractSolver):
             n_evaluations=state.n_evaluations + u.shape[0], n_nonfinite=bad, t=t,
             k_init=None, stage="ask", pending=None)
 
-    def best(self, state: EvosaxState):
+    def best(self, state: EvosaxState) -> tuple[Float[Array, " d"], Float[Array, ""]]:
         return state.best_x, state.best_f
 
 

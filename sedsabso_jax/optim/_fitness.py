@@ -18,20 +18,28 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol, TypeAlias
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float
+from jax.typing import DTypeLike
+from jaxtyping import Array, ArrayLike, Float, Int
 
 from .. import _x64
 
 
-def finite_or_inf(f):
+def finite_or_inf(f: Float[Array, "*shape"]) -> Float[Array, "*shape"]:
     """NaN or Inf fitness counts as +Inf, so it never becomes a best."""
     return jnp.where(jnp.isfinite(f), f, jnp.inf)
+
+
+class _RegressorSource(Protocol):
+    """What :meth:`L1Residual.from_base` needs of a base-parameter set
+    (:class:`~sedsabso_jax.BaseParameters`): its regressor ``(samples, n, d)``."""
+
+    def regressor(self, q: Any, qd: Any, qdd: Any) -> Any: ...
 
 
 class BlackBox(eqx.Module):
@@ -40,28 +48,32 @@ class BlackBox(eqx.Module):
     fn: Callable[[Array, Any], Array] = eqx.field(static=True)
     args: Any = None
 
-    def embed(self, X):
+    def embed(self, X: Float[Array, "*batch d"]) -> Float[Array, "*batch d"]:
         return X
 
-    def value(self, E):
+    def value(self, E: Float[Array, "*batch d"]) -> Float[Array, "*batch"]:
         flat = E.reshape((-1, E.shape[-1]))
         return jax.vmap(lambda x: self.fn(x, self.args))(flat).reshape(E.shape[:-1])
 
-    def __call__(self, x):
+    def __call__(self, x: Float[Array, " d"]) -> Float[Array, ""]:
         return self.fn(x, self.args)
 
-    def evaluate(self, X):
+    def evaluate(self, X: Float[Array, "*batch d"]) -> Float[Array, "*batch"]:
         """Raw fitness of every member (row) of ``X``."""
         return self.value(X)
 
-    def antenna_difference(self, E, G, a):
+    def antenna_difference(self, E: Float[Array, "*batch d"], G: Float[Array, "*batch d"],
+                           a: Float[ArrayLike, ""]
+                           ) -> tuple[Float[Array, "*batch"], Int[Array, "*batch"]]:
         """``(f(x + a v) - f(x - a v), non-finite count)`` per member from ``E = x``,
         ``G = v``: two evaluations; a NaN or Inf value counts as +Inf."""
         fl, fr = self.value(E + a * G), self.value(E - a * G)
         bad = (~jnp.isfinite(fl)).astype(jnp.int32) + (~jnp.isfinite(fr)).astype(jnp.int32)
         return finite_or_inf(fl) - finite_or_inf(fr), bad
 
-    def evaluate_with_antennae(self, X, V, a):
+    def evaluate_with_antennae(self, X: Float[Array, "k d"], V: Float[Array, "k d"],
+                               a: Float[ArrayLike, ""]
+                               ) -> tuple[Float[Array, " k"], Float[Array, " k"], Int[Array, " k"]]:
         """``(f(x), f(x + a v) - f(x - a v), the antennae's non-finite count)`` per member:
         three evaluations each, made as ONE evaluation of the stacked points, so ``fn``
         appears once in the compiled step (a fitness that branches over many functions,
@@ -80,7 +92,7 @@ class L1Residual(eqx.Module):
     and ``tau`` the measured torques stacked the same way. ``W`` is kept in both layouts,
     ``(m, d)`` and transposed ``(d, m)`` (:attr:`WT`): a few rows' product reads ``W^T``
     (SEDSABSO's 3 annealing candidates: 7.6 vs 19 us float64 from ``W``; 2-core AMD
-    EPYC, 21 x 3000, ``python benchmarks/kernels.py``).
+    EPYC, 21 x 3000, ``python -m tools.kernels``).
 
     On the CPU a ``W`` of at most :data:`CONSTANT_BYTES` is also kept as static data
     (compared by content), which the swarms' compiled code embeds as a constant: XLA
@@ -95,7 +107,8 @@ class L1Residual(eqx.Module):
     tau: Float[Array, " m"]
     W_constant: _Constant | None = eqx.field(static=True)
 
-    def __init__(self, W, tau, dtype=None):
+    def __init__(self, W: Float[ArrayLike, "*rows d"], tau: Float[ArrayLike, "*rows"],
+                 dtype: DTypeLike | None = None):
         dtype = _x64.float_dtype(dtype)
         if isinstance(W, jax.core.Tracer) or isinstance(tau, jax.core.Tracer):
             self._init_traced(W, tau, dtype)
@@ -127,7 +140,10 @@ class L1Residual(eqx.Module):
         self.W, self.WT, self.tau, self.W_constant = W, W.T, tau, None
 
     @classmethod
-    def from_base(cls, base, q, qd, qdd, tau, dtype=None) -> L1Residual:
+    def from_base(cls, base: _RegressorSource, q: Float[ArrayLike, "samples n"],
+                  qd: Float[ArrayLike, "samples n"], qdd: Float[ArrayLike, "samples n"],
+                  tau: Float[ArrayLike, "samples n"], dtype: DTypeLike | None = None
+                  ) -> L1Residual:
         """Eq. 17 for a :class:`~sedsabso_jax.BaseParameters` set and data
         ``q, qd, qdd, tau`` of shape ``(samples, n)``."""
         return cls(np.asarray(base.regressor(q, qd, qdd)), np.asarray(tau), dtype=dtype)
@@ -136,7 +152,7 @@ class L1Residual(eqx.Module):
     def dim(self) -> int:
         return self.W.shape[1]
 
-    def embed(self, X):
+    def embed(self, X: Float[Array, "*batch d"]) -> Float[Array, "*batch m"]:
         """``X W^T``: the residuals' linear part for every member (row) of ``X``."""
         if X.ndim > 1 and X.shape[-2] <= FEW_ROWS:
             return _matmul(X, self.WT)
@@ -144,10 +160,10 @@ class L1Residual(eqx.Module):
             return _matmul(X, np.asarray(self.W_constant.array.T, dtype=X.dtype))
         return _matmul(X, self.W.T)
 
-    def value(self, E):
+    def value(self, E: Float[Array, "*batch m"]) -> Float[Array, "*batch"]:
         return _row_sum(jnp.abs(E - self.tau))
 
-    def evaluate(self, X):
+    def evaluate(self, X: Float[Array, "*batch d"]) -> Float[Array, "*batch"]:
         """Eq. 17 for every member (row) of ``X``: for a population one product and one
         reduction, which XLA's CPU fuses into one kernel, so no (members x m) array is
         written (LDWPSO, 2-core AMD EPYC, quiet, same process, fastest of 7 seeds: 45 ms
@@ -156,16 +172,20 @@ class L1Residual(eqx.Module):
             return self.value(self.embed(X))
         return jnp.sum(jnp.abs(self.embed(X) - self.tau), -1)
 
-    def __call__(self, x):
+    def __call__(self, x: Float[Array, " d"]) -> Float[Array, ""]:
         return self.value(self.embed(x))
 
-    def antenna_difference(self, E, G, a):
+    def antenna_difference(self, E: Float[Array, "*batch m"], G: Float[Array, "*batch m"],
+                           a: Float[ArrayLike, ""]
+                           ) -> tuple[Float[Array, "*batch"], Int[Array, "*batch"]]:
         """``(f(x + a v) - f(x - a v), non-finite count)`` per member from ``E = W x``,
         ``G = W v`` in ONE pass over the residuals: ``|r + a g| - |r - a g|`` summed."""
         diff = _row_sum(_antenna_terms(E - self.tau, G, a))
         return diff, (~jnp.isfinite(diff)).astype(jnp.int32)
 
-    def evaluate_with_antennae(self, X, V, a):
+    def evaluate_with_antennae(self, X: Float[Array, "k d"], V: Float[Array, "k d"],
+                               a: Float[ArrayLike, ""]
+                               ) -> tuple[Float[Array, " k"], Float[Array, " k"], Int[Array, " k"]]:
         """``(f(x), f(x + a v) - f(x - a v), its non-finite count)`` per member, from
         ``W x``, ``W v`` and the residuals ``r = W x - tau``: ``|r + a g| - |r - a g|``
         summed. The (members x m) arrays live only inside this call: a swarm carries
@@ -186,6 +206,13 @@ class L1Residual(eqx.Module):
         return _row_sum(jnp.abs(R)), diff, (~jnp.isfinite(diff)).astype(jnp.int32)
 
 
+#: What the solvers take as ``fitness``: a fitness object (:func:`as_fitness` makes one
+#: from a callable ``f(x, args)``).
+Fitness: TypeAlias = BlackBox | L1Residual
+#: What :func:`~sedsabso_jax.minimise` takes as ``fitness``: a fitness object or a callable
+#: ``f(x, args) -> scalar``.
+FitnessLike: TypeAlias = Callable[[Array, Any], Array] | BlackBox | L1Residual
+
 #: Up to this many members a product reads ``W^T`` (:class:`L1Residual`).
 FEW_ROWS = 8
 #: The largest ``W`` (bytes) an :class:`L1Residual` keeps as a constant of the compiled
@@ -199,19 +226,19 @@ class _Constant:
 
     __slots__ = ("array", "_key")
 
-    def __init__(self, array):
+    def __init__(self, array: ArrayLike) -> None:
         self.array = np.ascontiguousarray(array)
         self.array.flags.writeable = False
         self._key = (self.array.shape, self.array.dtype.str,
                      hashlib.sha1(self.array.tobytes()).hexdigest())
 
-    def __hash__(self):
+    def __hash__(self) -> int:
         return hash(self._key)
 
-    def __eq__(self, other):
+    def __eq__(self, other: object) -> bool:
         return isinstance(other, _Constant) and self._key == other._key
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return f"constant{self.array.shape}"
 
 
@@ -239,7 +266,7 @@ def _row_sum(A):
     return jnp.sum(A, -1)
 
 
-def as_fitness(fitness, args=None):
+def as_fitness(fitness: FitnessLike, args: Any = None) -> Fitness:
     """A fitness object from a callable ``f(x, args)`` or one of the classes above."""
     if isinstance(fitness, (BlackBox, L1Residual)):
         if args is not None:

@@ -9,10 +9,13 @@ optimization", CEC 1999; ``docs/paper-notes.md`` Sec. 5::
 
 from __future__ import annotations
 
+from typing import Any
+
 import equinox as eqx
 import jax.numpy as jnp
+from jaxtyping import Array, Float, Int
 
-from ._solver import is_concrete
+from ._solver import Bounds, is_concrete
 from ._swarm import (
     AbstractSwarm,
     SwarmState,
@@ -47,7 +50,8 @@ class LDWPSO(AbstractSwarm):
     def n_slots(self) -> int:
         return self.n_particles
 
-    def move(self, s: SwarmState, draws, lower, upper):
+    def move(self, s: SwarmState, draws: Any, lower: Bounds, upper: Bounds
+             ) -> tuple[Float[Array, "slots d"], Float[Array, "slots d"]]:
         w = self.w_start - (self.w_start - self.w_end) * s.t / max(s.iterations - 1, 1)
         r1, r2 = draws
         vmax = self.vmax_fraction * (upper - lower)
@@ -55,7 +59,9 @@ class LDWPSO(AbstractSwarm):
         v = jnp.clip(v, -vmax, vmax)
         return jnp.clip(s.x + v, lower, upper), v
 
-    def absorb(self, s: SwarmState, raw, diff=None, diff_bad=None) -> SwarmState:
+    def absorb(self, s: SwarmState, raw: Float[Array, " slots"],
+               diff: Float[Array, " slots"] | None = None,
+               diff_bad: Int[Array, " slots"] | None = None) -> SwarmState:
         f, bad = evaluate(None, s.x, s.active, raw)
         s = eqx.tree_at(lambda s: (s.n_evaluations, s.slot_nonfinite), s,
                         (s.n_evaluations + jnp.sum(s.active, dtype=jnp.int32),

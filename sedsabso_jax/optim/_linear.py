@@ -20,11 +20,13 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
+from collections.abc import Sequence
 
 import numpy as np
 import scipy.linalg
 import scipy.optimize
 import scipy.sparse
+from jaxtyping import ArrayLike, Float
 
 #: Relative diagonal of the pivoted QR (unit-norm columns) below which a column counts as
 #: linearly dependent on the others.
@@ -80,7 +82,8 @@ class Factorization:
         x[self.perm] = z / scale
         return x
 
-    def warn(self, what: str, names=None, stacklevel: int = 2) -> None:
+    def warn(self, what: str, names: Sequence[object] | None = None, stacklevel: int = 2
+             ) -> None:
         """A UserWarning when the problem is rank deficient or poorly conditioned, with
         the condition number and the columns concerned (``names`` or indices)."""
         weak = self.weak
@@ -103,7 +106,7 @@ def _scale(norms: np.ndarray) -> np.ndarray:
     return np.where(norms > 0, norms, 1.0)
 
 
-def factorize(W, b) -> Factorization:
+def factorize(W: Float[ArrayLike, "m d"], b: Float[ArrayLike, " m"]) -> Factorization:
     """Factor ``min ||W x - b||_2`` (``W`` of shape ``(m, d)``, ``m >= 1``, ``b (m,)``)."""
     W, b = np.asarray(W, dtype=float), np.asarray(b, dtype=float)
     if W.ndim != 2 or b.shape != W.shape[:1]:
@@ -127,7 +130,8 @@ def factorize(W, b) -> Factorization:
                          order=order, relative=relative, shape=(m, d))
 
 
-def l1_solve(W, b) -> tuple[np.ndarray, int]:
+def l1_solve(W: Float[ArrayLike, "m d"], b: Float[ArrayLike, " m"]
+             ) -> tuple[Float[np.ndarray, " d"], int]:
     """``(argmin_x ||W x - b||_1, HiGHS iterations)``: the exact least-absolute-deviation
     fit (the paper's Eq. 17 is this objective) by linear programming.
 
@@ -165,7 +169,9 @@ def l1_solve(W, b) -> tuple[np.ndarray, int]:
     return z / scale, int(res.nit)
 
 
-def l1_solve_box(W, b, lower, upper) -> tuple[np.ndarray, int]:
+def l1_solve_box(W: Float[ArrayLike, "m d"], b: Float[ArrayLike, " m"],
+                 lower: Float[ArrayLike, " d"], upper: Float[ArrayLike, " d"]
+                 ) -> tuple[Float[np.ndarray, " d"], int]:
     """``(argmin_{lower <= x <= upper} ||W x - b||_1, HiGHS iterations)``: the exact
     least-absolute-deviation fit inside a box, the best a swarm searching that box can
     reach. The unconstrained optimum (:func:`l1_solve`) when it lies in the box; otherwise

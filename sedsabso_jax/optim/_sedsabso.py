@@ -28,17 +28,25 @@ compilation each on the 2-core CPU).
 
 from __future__ import annotations
 
+from typing import Any
+
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.typing import DTypeLike
+from jaxtyping import Array, ArrayLike, Bool, Float, Int, PRNGKeyArray
 
 from .. import _deprecation
 from ._bso import BeetleSwarm
-from ._solver import is_concrete
+from ._fitness import Fitness
+from ._solver import Bounds, is_concrete
 from ._swarm import SwarmState, check_population, evaluate, replace, swarm_best, uniforms
 
 
-def metropolis_accept(u, f_new, f_old, temperature):
+def metropolis_accept(u: Float[Array, "*shape"] | float, f_new: Float[Array, "*shape"] | float,
+                      f_old: Float[Array, "*shape"] | float,
+                      temperature: Float[Array, "*shape"] | float
+                      ) -> Bool[Array, "*shape"]:
     """Metropolis criterion: accept with probability ``min(1, exp(-(f_new - f_old) / T))``.
 
     Drawn as ``exp(-(f_new - f_old) / T) > u`` with ``u ~ U(0, 1)``; a non-finite ``f_new``
@@ -47,7 +55,7 @@ def metropolis_accept(u, f_new, f_old, temperature):
     return jnp.exp(-(f_new - f_old) / temperature) > u
 
 
-def _integer(value, name: str, minimum: int) -> None:
+def _integer(value: object, name: str, minimum: int) -> None:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
 
@@ -110,11 +118,13 @@ class SEDSABSO(BeetleSwarm):
         e = self.exponent_start + (self.exponent_end - self.exponent_start) * t
         return np.maximum(np.round(self.n_start * np.exp(-e)), 1).astype(int)
 
-    def evaluations(self, n_active):
+    def evaluations(self, n_active: int | Int[np.ndarray, " t"]
+                    ) -> int | Int[np.ndarray, " t"]:
         """BSO's three per beetle and the ``q`` annealing candidates (Eq. 14)."""
         return 3 * n_active + self.n_trials
 
-    def randomness(self, key, dim, dtype):
+    def randomness(self, key: PRNGKeyArray, dim: int, dtype: DTypeLike
+                   ) -> tuple[PRNGKeyArray, Float[Array, "q d"], Float[Array, " q"]]:
         """Keys for BSO's ``r1, r2`` (Eq. 11); Eq. 14's ``r`` (q x dim) and the q Metropolis
         uniforms drawn up front."""
         key, sub = jax.random.split(key)
@@ -123,16 +133,20 @@ class SEDSABSO(BeetleSwarm):
         return (jax.random.split(sub), r,
                 uniforms(jax.random.split(ku, self.n_trials), (), dtype))
 
-    def draw(self, randomness, shape, dtype):
+    def draw(self, randomness: Any, shape: tuple[int, ...], dtype: DTypeLike
+             ) -> tuple[Float[Array, "2 slots d"], Float[Array, "q d"], Float[Array, " q"]]:
         """``(r1 and r2 stacked, r, u)``: BSO's draws of Eq. 11 from their keys, and Eq.
         14's ``r`` and the Metropolis uniforms as drawn up front."""
         k12, r, u = randomness
         return uniforms(k12, shape, dtype), r, u
 
-    def move(self, s: SwarmState, draws, lower, upper):
+    def move(self, s: SwarmState, draws: Any, lower: Bounds, upper: Bounds
+             ) -> tuple[Float[Array, "slots d"], Float[Array, "slots d"]]:
         return super().move(s, draws[0], lower, upper)
 
-    def absorb(self, s: SwarmState, raw, diff, diff_bad) -> SwarmState:
+    def absorb(self, s: SwarmState, raw: Float[Array, " slots"],
+               diff: Float[Array, " slots"] | None, diff_bad: Int[Array, " slots"] | None
+               ) -> SwarmState:
         """The beetles' update; the guide becomes the swarm's best ``P_g`` if that is
         better (without annealing trials, the temperature then cools)."""
         s, (gx, gf) = self.absorb_beetles(s, raw, diff, diff_bad)
@@ -143,11 +157,13 @@ class SEDSABSO(BeetleSwarm):
             s = replace(s, temperature=s.temperature * self.decay)
         return s
 
-    def candidates(self, gx, r, lower, upper):
+    def candidates(self, gx: Float[Array, " d"], r: Float[Array, "q d"], lower: Bounds,
+                   upper: Bounds) -> Float[Array, "q d"]:
         """Eq. 14: ``clip(P_g (1 + s r_k), lower, upper)`` for the q rows of ``r``."""
         return jnp.clip(gx * (1.0 + self.perturbation_scale * r), lower, upper)
 
-    def accept(self, s: SwarmState, cand, raw, u) -> SwarmState:
+    def accept(self, s: SwarmState, cand: Float[Array, "q d"], raw: Float[Array, " q"],
+               u: Float[Array, " q"]) -> SwarmState:
         """The q candidates' Metropolis trials against the current guide, in turn (q is
         small: unrolled); the best ever kept apart; counts; the temperature cools."""
         fc, bad = evaluate(None, cand, raw=raw)
@@ -167,7 +183,8 @@ class SEDSABSO(BeetleSwarm):
             n_evaluations=s.n_evaluations + self.n_trials,
             temperature=s.temperature * self.decay)
 
-    def update(self, fitness, state: SwarmState, draws, lower, upper) -> SwarmState:
+    def update(self, fitness: Fitness, state: SwarmState, draws: Any, lower: Bounds,
+               upper: Bounds) -> SwarmState:
         """The beetles' iteration (Eq. 10-13), then ``q`` annealing trials on ``P_g``
         (Eq. 14), with the given draws."""
         _, r, u = draws
@@ -188,7 +205,8 @@ class SEDSABSO(BeetleSwarm):
             return self.finish(state)
         return replace(state, stage="anneal")
 
-    def ask(self, state: SwarmState, lower, upper):
+    def ask(self, state: SwarmState, lower: Bounds, upper: Bounds
+            ) -> tuple[Float[Array, "k d"], SwarmState]:
         if state.stage != "anneal":
             return super().ask(state, lower, upper)
         _, r, u = state.pending
@@ -196,7 +214,8 @@ class SEDSABSO(BeetleSwarm):
         cand = self.candidates(gx, r, lower, upper)
         return cand, replace(state, stage="accept", pending=(u, cand))
 
-    def tell(self, state: SwarmState, fitness_values, lower, upper) -> SwarmState:
+    def tell(self, state: SwarmState, fitness_values: Float[ArrayLike, " k"], lower: Bounds,
+             upper: Bounds) -> SwarmState:
         if state.stage == "anneal":
             raise ValueError("SEDSABSO.tell: the annealing candidates were not asked for; "
                              "call ask first")

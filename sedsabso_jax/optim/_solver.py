@@ -35,6 +35,7 @@ import numpy as np
 from jaxtyping import Array, Float, Int, PRNGKeyArray
 
 from .. import _deprecation
+from ._fitness import Fitness
 from ._result import Result
 
 #: A solver's state: a pytree of arrays, whatever the solver needs.
@@ -120,7 +121,7 @@ class AbstractSolver(eqx.Module):
         _deprecation.warn(f"{type(self).__name__}.check()",
                           "nothing: hyperparameters are checked when the solver is built")
 
-    def init(self, fitness, lower: Bounds, upper: Bounds, key: PRNGKeyArray,
+    def init(self, fitness: Fitness, lower: Bounds, upper: Bounds, key: PRNGKeyArray,
              iterations: int) -> State:
         """The state after the initial population is evaluated with ``fitness``: ready
         for the first :meth:`step`."""
@@ -136,21 +137,21 @@ class AbstractSolver(eqx.Module):
         strategy that starts from a distribution). Default 1."""
         return 1
 
-    def step(self, fitness, state: State, lower: Bounds, upper: Bounds) -> State:
+    def step(self, fitness: Fitness, state: State, lower: Bounds, upper: Bounds) -> State:
         """One iteration: :attr:`asks_per_iteration` rounds of ask, evaluate, tell."""
         for _ in range(self.asks_per_iteration):
             points, state = self.ask(state, lower, upper)
             state = self.tell(state, fitness.evaluate(points), lower, upper)
         return state
 
-    def run(self, fitness, lower: Bounds, upper: Bounds, key: PRNGKeyArray,
+    def run(self, fitness: Fitness, lower: Bounds, upper: Bounds, key: PRNGKeyArray,
             iterations: int) -> Result:
         """One whole run (pure): :meth:`init`, then ``iterations`` :meth:`step` in a
         ``lax.scan``; the best fitness is recorded after each. Timings are ``None``:
         :func:`~sedsabso_jax.minimise` measures them outside any trace."""
         iterations = int(iterations)
 
-        def body(state, _):
+        def body(state: State, _: None) -> tuple[State, Float[Array, ""]]:
             state = self.step(fitness, state, lower, upper)
             return state, self.best(state)[1]
 
@@ -158,7 +159,8 @@ class AbstractSolver(eqx.Module):
         state, history_f = jax.lax.scan(body, state, None, length=iterations)
         return self.result(state, history_f, lower.shape[0])
 
-    def result(self, state: State, history_f, dim: int) -> Result:
+    def result(self, state: State, history_f: Float[Array, " iterations"], dim: int
+               ) -> Result:
         """The run's :class:`~._result.Result` from its final state and history."""
         x, f = self.best(state)
         iterations = history_f.shape[-1]
@@ -170,7 +172,7 @@ class AbstractSolver(eqx.Module):
                       n_nonfinite=self.n_nonfinite(state))
 
 
-def is_concrete(*values) -> bool:
+def is_concrete(*values: Any) -> bool:
     """Whether every value is concrete (not a tracer): hyperparameters given as traced
     arrays (a ``vmap`` over a hyperparameter) are checked only where they are concrete."""
     return not any(isinstance(v, jax.core.Tracer) for v in jax.tree.leaves(values))

@@ -31,11 +31,12 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Bool, Float, Int
+from jax.typing import DTypeLike
+from jaxtyping import Array, ArrayLike, Bool, Float, Int, PRNGKeyArray
 
-from ._fitness import finite_or_inf
+from ._fitness import Fitness, finite_or_inf
 from ._result import Result
-from ._solver import AbstractSolver
+from ._solver import AbstractSolver, Bounds
 
 #: Whether a run traced now may draw each phase's random numbers before its loop
 #: (:func:`predraws`); the driver sets it for a run compiled on its own on the CPU.
@@ -80,7 +81,7 @@ class SwarmState(eqx.Module):
     pending: Any = None
 
     @property
-    def nonfinite_total(self):
+    def nonfinite_total(self) -> Int[Array, ""]:
         """Every non-finite evaluation so far (counted per slot inside the loop, where a
         sum per iteration would cost a reduction; summed here)."""
         return self.n_nonfinite + jnp.sum(self.slot_nonfinite, dtype=jnp.int32)
@@ -127,7 +128,8 @@ class AbstractSwarm(AbstractSolver):
     def initial_temperature(self) -> float:
         return 0.0
 
-    def evaluations(self, n_active):
+    def evaluations(self, n_active: int | Int[np.ndarray, " t"]
+                    ) -> int | Int[np.ndarray, " t"]:
         """Fitness evaluations one iteration makes with ``n_active`` members (a member's
         position counts once). Default: one per member."""
         return n_active
@@ -135,23 +137,23 @@ class AbstractSwarm(AbstractSolver):
     def evaluation_counts(self, iterations: int, dim: int) -> np.ndarray:
         return self.n_slots + np.cumsum(self.evaluations(self.schedule(int(iterations))))
 
-    def sa_accepted(self, state: SwarmState):
+    def sa_accepted(self, state: SwarmState) -> Int[Array, ""]:
         return state.sa_accepted
 
-    def n_nonfinite(self, state: SwarmState):
+    def n_nonfinite(self, state: SwarmState) -> Int[Array, ""]:
         return state.nonfinite_total
 
-    def best(self, state: SwarmState):
+    def best(self, state: SwarmState) -> tuple[Float[Array, " d"], Float[Array, ""]]:
         return state.best_x, state.best_f
 
     # ---------------------------------------------------------------- randomness
-    def randomness(self, key, dim: int, dtype):
+    def randomness(self, key: PRNGKeyArray, dim: int, dtype: DTypeLike) -> Any:
         """What one iteration draws from, derived from the iteration's key: keys for the
         population's draws (their shape follows the phase) or small draws made up front.
         Default: two keys, for ``r1`` and ``r2`` of the velocity update."""
         return jax.random.split(key)
 
-    def draw(self, randomness, shape, dtype):
+    def draw(self, randomness: Any, shape: tuple[int, ...], dtype: DTypeLike) -> Any:
         """One iteration's draws for a population of ``shape`` (slots, d), from what
         :meth:`randomness` returned: what :meth:`update` takes. Default: ``(r1, r2)``,
         uniform, one per slot and dimension."""
@@ -159,12 +161,15 @@ class AbstractSwarm(AbstractSolver):
 
     # ------------------------------------------------------- one iteration, in halves
     @abc.abstractmethod
-    def move(self, state: SwarmState, draws, lower, upper) -> tuple[Array, Array]:
+    def move(self, state: SwarmState, draws: Any, lower: Bounds, upper: Bounds
+             ) -> tuple[Array, Array]:
         """``(x, v)``: the new positions and velocities of every slot (nothing
         evaluated)."""
 
     @abc.abstractmethod
-    def absorb(self, state: SwarmState, raw, diff, diff_bad) -> SwarmState:
+    def absorb(self, state: SwarmState, raw: Float[Array, " slots"],
+               diff: Float[Array, " slots"] | None, diff_bad: Int[Array, " slots"] | None
+               ) -> SwarmState:
         """The state after its new positions (``state.x``, ``state.v``) were evaluated:
         raw fitness ``raw``, and for beetles the antenna difference and its non-finite
         count; personal, global and best-ever updated."""
@@ -173,7 +178,10 @@ class AbstractSwarm(AbstractSolver):
         """The end of an iteration: ``t`` advanced, the ask/tell bookkeeping cleared."""
         return replace(state, t=state.t + 1, stage="move", pending=None)
 
-    def evaluate_moved(self, fitness, x, v):
+    def evaluate_moved(self, fitness: Fitness, x: Float[Array, "slots d"],
+                       v: Float[Array, "slots d"]
+                       ) -> tuple[Float[Array, " slots"], Float[Array, " slots"] | None,
+                                  Int[Array, " slots"] | None]:
         """``(raw, diff, diff_bad)`` of new positions, from the fitness object (for
         beetles with the antennae, in one pass for Eq. 17)."""
         a = self.antenna
@@ -181,7 +189,8 @@ class AbstractSwarm(AbstractSolver):
             return fitness.evaluate(x), None, None
         return fitness.evaluate_with_antennae(x, v, a)
 
-    def update(self, fitness, state: SwarmState, draws, lower, upper) -> SwarmState:
+    def update(self, fitness: Fitness, state: SwarmState, draws: Any, lower: Bounds,
+               upper: Bounds) -> SwarmState:
         """Iteration ``state.t`` with the given draws (what :meth:`draw` returns): move,
         evaluate with ``fitness``, update the bests. ``state.key`` is not touched."""
         x, v = self.move(state, draws, lower, upper)
@@ -190,7 +199,8 @@ class AbstractSwarm(AbstractSolver):
         return self.finish(self.absorb(state, raw, diff, diff_bad))
 
     # --------------------------------------------------------------------- contract
-    def start(self, lower, upper, key, iterations: int) -> SwarmState:
+    def start(self, lower: Bounds, upper: Bounds, key: PRNGKeyArray, iterations: int
+              ) -> SwarmState:
         key, k0 = jax.random.split(key)
         x, v = initial_positions(lower, upper, k0, self.n_slots,
                                  self.vmax_fraction * (upper - lower))
@@ -198,7 +208,8 @@ class AbstractSwarm(AbstractSolver):
                              self.initial_temperature)
         return replace(state, key=key, iterations=int(iterations), stage="start")
 
-    def init(self, fitness, lower, upper, key, iterations: int) -> SwarmState:
+    def init(self, fitness: Fitness, lower: Bounds, upper: Bounds, key: PRNGKeyArray,
+             iterations: int) -> SwarmState:
         """The initial population, uniform in the box, velocities uniform in ``+-Vmax``,
         evaluated (with the beetles' antennae), the worst beyond N(0) inactive."""
         key, k0 = jax.random.split(key)
@@ -208,7 +219,8 @@ class AbstractSwarm(AbstractSolver):
         state = set_active(state, int(self.schedule(int(iterations))[0]))
         return replace(state, key=key, iterations=int(iterations))
 
-    def step(self, fitness, state: SwarmState, lower, upper) -> SwarmState:
+    def step(self, fitness: Fitness, state: SwarmState, lower: Bounds, upper: Bounds
+             ) -> SwarmState:
         """One iteration on a state of constant shape: the phases' reordering and the
         re-ranking where N(t) falls, at the iterations :meth:`run` does them."""
         state, draws = self._draws_for_step(state)
@@ -236,19 +248,23 @@ class AbstractSwarm(AbstractSolver):
                           state)
         return state
 
-    def points(self, x, v):
+    def points(self, x: Float[Array, "slots d"], v: Float[Array, "slots d"]
+               ) -> Float[Array, "k d"]:
         """The points one iteration evaluates for positions ``x``: ``x`` itself, and for
         beetles stacked with its antennae ``x + a v`` and ``x - a v``."""
         a = self.antenna
         return x if a is None else jnp.concatenate([x, x + a * v, x - a * v])
 
-    def split_values(self, values, n: int):
+    def split_values(self, values: Float[Array, " k"], n: int
+                     ) -> tuple[Float[Array, " n"], Float[Array, " n"] | None,
+                                Int[Array, " n"] | None]:
         """``(raw, diff, diff_bad)`` from the fitness of :meth:`points`."""
         if self.antenna is None:
             return values, None, None
         return values[:n], *antenna_difference(values[n:2 * n], values[2 * n:])
 
-    def ask(self, state: SwarmState, lower, upper):
+    def ask(self, state: SwarmState, lower: Bounds, upper: Bounds
+            ) -> tuple[Float[Array, "k d"], SwarmState]:
         if state.stage == "start":
             return self.points(state.x, state.v), replace(state, stage="started")
         if state.stage != "move":
@@ -259,7 +275,8 @@ class AbstractSwarm(AbstractSolver):
         state = replace(state, x=x, v=v, stage="evaluate", pending=draws)
         return self.points(x, v), state
 
-    def tell(self, state: SwarmState, fitness_values, lower, upper) -> SwarmState:
+    def tell(self, state: SwarmState, fitness_values: Float[ArrayLike, " k"], lower: Bounds,
+             upper: Bounds) -> SwarmState:
         n = state.x.shape[0]
         values = jnp.asarray(fitness_values, state.x.dtype).reshape(-1)
         want = self.points(state.x, state.v).shape[0]
@@ -287,7 +304,8 @@ class AbstractSwarm(AbstractSolver):
         """The static phase plan of a run of ``iterations`` (see :class:`Plan`)."""
         return _plan(self, int(iterations))
 
-    def run(self, fitness, lower, upper, key, iterations: int) -> Result:
+    def run(self, fitness: Fitness, lower: Bounds, upper: Bounds, key: PRNGKeyArray,
+            iterations: int) -> Result:
         """One run in phases of static, shrinking slot counts (module docstring), each a
         ``lax.scan`` of :meth:`update`; the numbers of ``init`` + ``iterations`` ``step``,
         with arrays cut to each phase's population. Where N(t) falls is static: the
@@ -308,8 +326,10 @@ class AbstractSwarm(AbstractSolver):
                 phase_rand = jax.vmap(lambda r, shape=shape: self.draw(r, shape, dtype))(
                     phase_rand)
 
-            def body(state, inp, predraw=predraw, shape=shape,
-                     rerank=bool(plan.drops[a:b].any())):
+            def body(state: SwarmState, inp: tuple[Int[Array, ""], Bool[Array, ""], Any],
+                     predraw: bool = predraw, shape: tuple[int, int] = shape,
+                     rerank: bool = bool(plan.drops[a:b].any())
+                     ) -> tuple[SwarmState, Float[Array, ""]]:
                 n_active, drop, r = inp
                 if rerank:
                     state = _when(drop, lambda s: set_active(s, n_active), state)
@@ -355,7 +375,7 @@ def _plan_of(schedule: tuple[int, ...], n_phases: int) -> Plan:
     return Plan(phases=parts, n_active=sched, starts=starts, slots=slots, drops=drops)
 
 
-def replace(state: SwarmState, **changes) -> SwarmState:
+def replace(state: SwarmState, **changes: Any) -> SwarmState:
     """``state`` with fields replaced (static ones included)."""
     return dataclasses.replace(state, **changes)
 
@@ -369,14 +389,15 @@ def _when(pred, fn, state):
     return jax.tree.map(lambda a, b: jnp.where(pred, a, b), fn(state), state)
 
 
-def iteration_randomness(solver: AbstractSwarm, key, iterations: int, dim: int, dtype):
+def iteration_randomness(solver: AbstractSwarm, key: PRNGKeyArray, iterations: int, dim: int,
+                         dtype: DTypeLike) -> Any:
     """Every iteration's randomness, derived before the loop: the chain
     ``key, sub = split(key)`` gives iteration t its key ``sub``, from which
     ``solver.randomness`` derives keys (or small draws), vectorised over the iterations.
     The population's draws (``solver.draw``) are then made per phase before its loop
     or inside it. The numbers are the same either way, and the same as drawing each
     inside the loop (:meth:`AbstractSwarm.step`)."""
-    def chain(key, _):
+    def chain(key: PRNGKeyArray, _: None) -> tuple[PRNGKeyArray, PRNGKeyArray]:
         key, sub = jax.random.split(key)
         return key, sub
 
@@ -384,7 +405,8 @@ def iteration_randomness(solver: AbstractSwarm, key, iterations: int, dim: int, 
     return jax.vmap(lambda k: solver.randomness(k, dim, dtype))(subs)
 
 
-def predraws(solver: AbstractSwarm, randomness, shape, dtype, length: int) -> bool:
+def predraws(solver: AbstractSwarm, randomness: Any, shape: tuple[int, ...], dtype: DTypeLike,
+             length: int) -> bool:
     """Whether one phase's population draws are made before its loop: when the driver
     allows it (:data:`PREDRAW`: a run compiled on its own on the CPU) and they take at
     most :data:`PREDRAW_BYTES`. Inside the loop XLA fuses the hash into each fusion that
@@ -402,25 +424,30 @@ def predraws(solver: AbstractSwarm, randomness, shape, dtype, length: int) -> bo
 
 
 # -------------------------------------------------------------------- population state
-def evaluate(fitness, X, mask=None, raw=None):
+def evaluate(fitness: Fitness | None, X: Float[Array, "k d"],
+             mask: Bool[Array, " k"] | None = None, raw: Float[Array, " k"] | None = None
+             ) -> tuple[Float[Array, " k"], Int[Array, " k"]]:
     """Fitness of the members ``X`` (or their ``raw`` values when already computed),
     non-finite values mapped to +Inf, and per member 1 where a value was non-finite
     (0 outside ``mask`` when given)."""
-    raw = fitness.evaluate(X) if raw is None else raw
+    raw = fitness.evaluate(X) if raw is None else raw  # type: ignore[union-attr]
     bad = ~jnp.isfinite(raw)
     if mask is not None:
         bad = bad & mask
     return finite_or_inf(raw), bad.astype(jnp.int32)
 
 
-def antenna_difference(fl, fr):
+def antenna_difference(fl: Float[Array, " k"], fr: Float[Array, " k"]
+                       ) -> tuple[Float[Array, " k"], Int[Array, " k"]]:
     """``(f(xl) - f(xr), how many of the two were NaN or Inf)`` per member from the two
     antennae's raw values; a NaN or Inf value counts as +Inf."""
     bad = (~jnp.isfinite(fl)).astype(jnp.int32) + (~jnp.isfinite(fr)).astype(jnp.int32)
     return finite_or_inf(fl) - finite_or_inf(fr), bad
 
 
-def initial_positions(lower, upper, key, slots: int, vmax):
+def initial_positions(lower: Bounds, upper: Bounds, key: PRNGKeyArray, slots: int,
+                      vmax: Float[Array, " d"]
+                      ) -> tuple[Float[Array, "slots d"], Float[Array, "slots d"]]:
     """Positions uniform in the box, velocities uniform in ``+-vmax``."""
     kx, kv = jax.random.split(key)
     d = lower.shape[0]
@@ -429,7 +456,10 @@ def initial_positions(lower, upper, key, slots: int, vmax):
     return x, v
 
 
-def initial_from(x, v, raw, diff, diff_bad, temperature=0.0) -> SwarmState:
+def initial_from(x: Float[Array, "slots d"], v: Float[Array, "slots d"],
+                 raw: Float[Array, " slots"], diff: Float[Array, " slots"] | None,
+                 diff_bad: Int[Array, " slots"] | None, temperature: Float[ArrayLike, ""] = 0.0
+                 ) -> SwarmState:
     """The state of a population at ``x`` with velocities ``v`` and raw fitness ``raw``
     (and antenna differences, for beetles)."""
     slots = x.shape[0]
@@ -438,7 +468,8 @@ def initial_from(x, v, raw, diff, diff_bad, temperature=0.0) -> SwarmState:
     f, bad = evaluate(None, x, raw=raw)
     i = jnp.argmin(f)
     return SwarmState(
-        x=x, v=v, antennae=diff, antennae_bad=diff_bad, pbest_x=x, pbest_f=f,
+        x=x, v=v, antennae=diff, antennae_bad=diff_bad,  # type: ignore[arg-type]
+        pbest_x=x, pbest_f=f,
         active=jnp.ones(slots, bool), slot_nonfinite=jnp.zeros(slots, jnp.int32),
         guide_x=x[i], guide_f=f[i], best_x=x[i], best_f=f[i],
         temperature=jnp.asarray(temperature, x.dtype), sa_accepted=jnp.int32(0),
@@ -446,8 +477,9 @@ def initial_from(x, v, raw, diff, diff_bad, temperature=0.0) -> SwarmState:
     )
 
 
-def initial_state(fitness, lower, upper, key, slots: int, vmax, temperature=0.0,
-                  antenna=None) -> SwarmState:
+def initial_state(fitness: Fitness, lower: Bounds, upper: Bounds, key: PRNGKeyArray,
+                  slots: int, vmax: Float[Array, " d"], temperature: Float[ArrayLike, ""] = 0.0,
+                  antenna: Float[ArrayLike, ""] | None = None) -> SwarmState:
     """Positions uniform in the box, velocities uniform in ``+-vmax``, evaluated; with
     ``antenna`` (the beetles' ``a``), also each slot's ``f(x + a v) - f(x - a v)``."""
     x, v = initial_positions(lower, upper, key, slots, vmax)
@@ -458,7 +490,8 @@ def initial_state(fitness, lower, upper, key, slots: int, vmax, temperature=0.0,
     return initial_from(x, v, raw, diff, diff_bad, temperature)
 
 
-def update_bests(state: SwarmState, x, f):
+def update_bests(state: SwarmState, x: Float[Array, "slots d"], f: Float[Array, " slots"]
+                 ) -> tuple[SwarmState, tuple[Float[Array, " d"], Float[Array, ""]]]:
     """Take the new positions; update the active slots' personal bests and the best ever.
     Returns the state and the swarm's global best ``(x, f)`` among the active slots."""
     better = state.active & (f < state.pbest_f)
@@ -476,14 +509,14 @@ def update_bests(state: SwarmState, x, f):
     ), (pbest_x[i], masked[i])
 
 
-def swarm_best(state: SwarmState):
+def swarm_best(state: SwarmState) -> tuple[Float[Array, " d"], Float[Array, ""]]:
     """The swarm's global best ``(x, f)`` among the active slots' personal bests."""
     masked = jnp.where(state.active, state.pbest_f, jnp.inf)
     i = jnp.argmin(masked)
     return state.pbest_x[i], masked[i]
 
 
-def set_active(state: SwarmState, n_active) -> SwarmState:
+def set_active(state: SwarmState, n_active: Int[ArrayLike, ""]) -> SwarmState:
     """Keep the ``n_active`` slots with the best personal bests (worst dropped first)."""
     order = jnp.argsort(jnp.where(state.active, state.pbest_f, jnp.inf))
     rank = jnp.empty_like(order).at[order].set(jnp.arange(order.shape[0]))
@@ -511,7 +544,7 @@ def shrink(state: SwarmState, slots: int) -> SwarmState:
                        [getattr(state, k)[order] for k in PER_SLOT])
 
 
-def reorder(state: SwarmState, slots) -> SwarmState:
+def reorder(state: SwarmState, slots: Int[ArrayLike, ""]) -> SwarmState:
     """:func:`shrink` without the cut: the slots reordered best first and those from
     ``slots`` on made inactive (the state keeps its shape)."""
     n = state.x.shape[0]
@@ -521,7 +554,7 @@ def reorder(state: SwarmState, slots) -> SwarmState:
     return eqx.tree_at(lambda s: s.active, state, state.active & (jnp.arange(n) < slots))
 
 
-def phases(schedule: np.ndarray, n_phases: int):
+def phases(schedule: np.ndarray, n_phases: int) -> list[tuple[int, int, int]]:
     """Split iterations into at most ``n_phases`` runs of iterations with a static slot
     count each: the largest active count inside the phase (N(t) never grows)."""
     K = len(schedule)
@@ -529,7 +562,8 @@ def phases(schedule: np.ndarray, n_phases: int):
     return [(a, b, int(schedule[a:b].max())) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
 
 
-def uniforms(keys, shape, dtype):
+def uniforms(keys: PRNGKeyArray, shape: tuple[int, ...], dtype: DTypeLike
+             ) -> Float[Array, "*keys_and_shape"]:
     """``jax.random.uniform(k, shape, dtype)`` for each key of ``keys`` in one batched
     call, bit for bit (``tests/test_swarms.py`` checks it).
 
@@ -537,13 +571,14 @@ def uniforms(keys, shape, dtype):
     since JAX 0.5) the bits come from :func:`_threefry2x32`, the same hash written out
     round by round: XLA fuses it into one elementwise loop, where JAX's own CPU lowering
     runs it as a 5-trip loop (an iteration's r1, r2 for 50 x 21: 3.5 vs 7.1 us on the
-    2-core AMD EPYC, ``python -m benchmarks.kernels``). Other keys go through
+    2-core AMD EPYC, ``python -m tools.kernels``). Other keys go through
     ``jax.random.uniform``. Element ``i`` of the flattened ``shape`` depends on ``i``
     alone, so the first rows of a larger draw are a smaller draw."""
     n = math.prod(shape)
     if not (jnp.issubdtype(keys.dtype, jax.dtypes.prng_key)
             and str(jax.random.key_impl(keys)) == "threefry2x32"
-            and jax.config.jax_threefry_partitionable and n < 2**32):
+            and jax.config.jax_threefry_partitionable  # type: ignore[attr-defined]
+            and n < 2**32):
         return jax.vmap(lambda k: jax.random.uniform(k, shape, dtype))(keys)
     dtype = jnp.dtype(dtype)
     kd = jax.random.key_data(keys)  # (..., 2) uint32
@@ -551,6 +586,7 @@ def uniforms(keys, shape, dtype):
     k1, k2 = (kd[..., i].reshape(kd.shape[:-1] + (1,) * len(shape)) for i in (0, 1))
     b1, b2 = _threefry2x32(k1, k2, jnp.zeros_like(lo), lo)
     nbits, nmant = jnp.finfo(dtype).bits, jnp.finfo(dtype).nmant
+    uint: type[np.unsignedinteger[Any]]
     if nbits == 64:
         uint = np.uint64
         bits = (b1.astype(uint) << uint(32)) | b2.astype(uint)
@@ -577,7 +613,7 @@ def _threefry2x32(k1, k2, x1, x2):
     return x1, x2
 
 
-def check_population(n, name: str) -> None:
+def check_population(n: object, name: str) -> None:
     """A population size must be an integer >= 1."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"{name} must be an integer >= 1, got {n!r}")

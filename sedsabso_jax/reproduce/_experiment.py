@@ -38,6 +38,7 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Float
 
 from .._output import jsonable
 from .._version import __version__
@@ -97,7 +98,9 @@ class Settings:
             raise ValueError(f"seed must be an integer >= 0, got {self.seed!r}")
 
 
-def scenario_box(true: np.ndarray, scenario: str, seed: int):
+def scenario_box(true: np.ndarray, scenario: str, seed: int
+                 ) -> tuple[Float[np.ndarray, " p"] | None, Float[np.ndarray, " p"],
+                            Float[np.ndarray, " p"]]:
     """``(prior, lower, upper)`` for a scenario (see the module docstring); ``prior`` is
     None in the ``paper`` scenario."""
     true = np.asarray(true, dtype=float)

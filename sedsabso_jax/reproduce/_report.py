@@ -7,18 +7,24 @@ half-overwritten and a failed run leaves no partial file.
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .. import paper
-from .._output import markdown_table, pyplot, save_figure, to_json, write_text
+from .._output import PathLike, markdown_table, pyplot, save_figure, to_json, write_text
 from ..dynamics._base_parameters import base_parameters
+from ..dynamics._robot import Robot
+from ._experiment import Experiment
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 #: colour per method, shared by the figures
 COLOURS = {"SEDSABSO": "tab:red", "BSO": "tab:blue", "LDWPSO": "tab:green"}
 
 
-def base_parameter_table(robot, *, paper_columns: bool = False) -> str:
+def base_parameter_table(robot: Robot, *, paper_columns: bool = False) -> str:
     """Markdown table: name, expression, value from the robot's parameters; with
     ``paper_columns`` (the built-in RS010N) the paper's Table 5 beside it."""
     base = base_parameters(robot)
@@ -117,7 +123,7 @@ def table5(results: dict) -> str:
         "(sedsabso_jax/paper.py), so they are context, not a target.")
 
 
-def figure_population(history_n: dict, phases: dict):
+def figure_population(history_n: dict, phases: dict) -> Figure:
     """Figure 5: the active population N(t) of SEDSABSO against BSO's constant N, with the
     areas (total beetle-iterations, i.e. work) shaded and given in the legend; for a swarm
     with ``phases`` (``[(first, end, slots), ...]``, its compiled phases), the slots
@@ -147,7 +153,7 @@ def figure_population(history_n: dict, phases: dict):
     return fig
 
 
-def figure_convergence(history_f: dict, l1_floor: float):
+def figure_convergence(history_f: dict, l1_floor: float) -> Figure:
     """Figure 6: best fitness against iteration (log scale), median and min-max band over
     the runs per swarm, the exact L1 optimum as a horizontal line."""
     plt = pyplot()
@@ -179,7 +185,8 @@ def figure_convergence(history_f: dict, l1_floor: float):
     return fig
 
 
-def write_outputs(experiment, out_dir, json_path=None) -> list[str]:
+def write_outputs(experiment: Experiment, out_dir: PathLike | None,
+                  json_path: PathLike | None = None) -> list[str]:
     """Write table4.md, table5.md, fig5_population.png, fig6_convergence.png and
     results.json into ``out_dir`` (created if missing), and results.json also to
     ``json_path`` if given (its directory created if missing). Everything is rendered
