@@ -43,7 +43,8 @@ def test_import_changes_no_jax_configuration_nor_evosax_dtypes():
         before = state()
     """) + IMPORT_EVERYTHING + textwrap.dedent("""
         after = state()
-        changed = sorted(k for k in before["config"] if before["config"][k] != after["config"].get(k))
+        changed = sorted(k for k in before["config"]
+                         if before["config"][k] != after["config"].get(k))
         print(json.dumps({"changed": changed, "same": before == after,
                           "evosax": after["evosax"]["PSO"], "float": after["default_float"]}))
     """))

@@ -87,6 +87,11 @@ def test_wls_weights(rs010n, rng):
     # equal weights: WLS is OLS exactly
     same = identify(robot, (q, qd, qdd, tau_noisy), WLS([2.0, 2.0, 2.0]), base=base)
     np.testing.assert_allclose(same.values, ols.values, rtol=1e-10, atol=1e-10)
+    # asked for by name ("equal", what --method WLS --weights equal gives): the same
+    equal = identify(robot, (q, qd, qdd, tau_noisy), WLS("equal"), base=base)
+    assert equal.settings["weights"] == "equal" and equal.settings["sigma"] == [1.0] * 3
+    np.testing.assert_allclose(equal.values, ols.values, rtol=1e-10, atol=1e-10)
+    assert sj.identification.estimator_candidates("WLS", "equal") == (WLS("equal"),)
     # equal noise: Gautier's weights come out nearly equal, so WLS stays close to OLS
     wls = identify(robot, (q, qd, qdd, tau_noisy), WLS(), base=base)
     assert wls.settings["weights"] == "residual"

@@ -128,7 +128,8 @@ def test_the_checks_see_the_imports():
     pairs = {(s, d) for s, d, _, _ in EDGES}
     assert ("sedsabso_jax.identification._identify", "sedsabso_jax.optim._linear") in pairs
     assert ("sedsabso_jax.dynamics._robots", "sedsabso_jax.paper") in pairs
-    assert ("sedsabso_jax.cli._main", "sedsabso_jax.reproduce._experiment") in pairs  # in a function
+    # an import inside a function
+    assert ("sedsabso_jax.cli._main", "sedsabso_jax.reproduce._experiment") in pairs
 
 
 # ------------------------------------------------------------------------ public API

@@ -73,8 +73,8 @@ def chunk_size(n_joints: int, samples: int | None = None, *, itemsize: int = 8,
     """Samples per ``lax.map`` chunk, None for all at once.
 
     On the CPU the intermediates grow as n^2 per sample and the fastest chunks are small:
-    measured on a 2-core CPU (``python -m benchmarks.regressor``, 10,000 samples), 16 was fastest for
-    3 joints and 8 for 7 joints (1, 2, 4, 8, 16, 32 tried). On an accelerator
+    measured on a 2-core CPU (``python -m benchmarks.regressor``, 10,000 samples), 16 was
+    fastest for 3 joints and 8 for 7 joints (1, 2, 4, 8, 16, 32 tried). On an accelerator
     (``backend``, default ``jax.default_backend()``) all ``samples`` at once (``vmap``),
     or when they would take more than ``memory_budget`` bytes (:func:`sample_bytes`;
     default :data:`DEFAULT_MEMORY_BUDGET`) the largest chunks within it."""

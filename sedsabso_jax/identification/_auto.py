@@ -58,16 +58,17 @@ def estimator_candidates(method: str | None = None, sigma: Sigma = AUTO, **optio
     ``sigma``: :data:`AUTO`, None or ``"equal"``, ``"residual"``, ``"limits"``;
     ``options``: the named estimator's options (``runs``, ``iterations``, ``seed``, ...;
     those it does not have are ignored)."""
-    if sigma == "equal":
-        sigma = None
-    if sigma != AUTO and sigma not in SIGMA_CANDIDATES:
+    if sigma != AUTO and sigma != "equal" and sigma not in SIGMA_CANDIDATES:
         raise ValueError(f"sigma must be {AUTO!r}, 'equal' (None), 'residual' or 'limits', "
                          f"got {sigma!r}")
     if method is None:
-        return tuple(e for e in ESTIMATOR_CANDIDATES if sigma == AUTO or e.sigma == sigma)
+        wanted = None if sigma == "equal" else sigma
+        return tuple(e for e in ESTIMATOR_CANDIDATES if sigma == AUTO or e.sigma == wanted)
+    first = Estimator.named(method, **options)
+    if sigma == "equal":  # None where that is equal weights (as 0.2 wrote it), else explicit
+        sigma = None if first.default_weighting == "equal" else "equal"
     if sigma != AUTO:
         return (Estimator.named(method, sigma=sigma, **options),)
-    first = Estimator.named(method, **options)
     if isinstance(first, BoxSearch):
         return (first,)
     return tuple(Estimator.named(method, sigma=s, **options) for s in SIGMA_CANDIDATES

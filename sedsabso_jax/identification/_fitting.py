@@ -46,11 +46,13 @@ def per_joint(name: str, value: Sigma, n: int, allow_none: bool = True
 
 
 def check_sigma(sigma: Sigma) -> str | tuple[float, ...] | None:
-    """``sigma`` as an estimator keeps it: None, ``"residual"``, ``"limits"`` or a tuple of
-    positive finite numbers (one per joint; their count is checked against the data)."""
-    if sigma is None or (isinstance(sigma, str) and sigma in ("residual", "limits")):
+    """``sigma`` as an estimator keeps it: None (the estimator's default weighting),
+    ``"equal"``, ``"residual"``, ``"limits"`` or a tuple of positive finite numbers (one
+    per joint; their count is checked against the data)."""
+    if sigma is None or (isinstance(sigma, str) and sigma in ("equal", "residual", "limits")):
         return sigma
-    expected = "sigma must be None, 'residual', 'limits' or positive finite numbers (one per "
+    expected = ("sigma must be None, 'equal', 'residual', 'limits' or positive finite numbers "
+                "(one per ")
     try:
         v = None if isinstance(sigma, str) else np.asarray(sigma, dtype=float)
     except (TypeError, ValueError):
