@@ -234,7 +234,7 @@ def test_predict_batches(rs010n, rng):
 
 
 @pytest.mark.parametrize("make, match", [
-    (lambda: OLS(sigma="robust"), r"^sigma must be None, 'residual', 'limits' or positive"),
+    (lambda: OLS(sigma="robust"), r"^sigma must be None, 'equal', 'residual', 'limits' or "),
     (lambda: WLS(sigma=[1.0, -1.0, 1.0]), r"^sigma must be None, .*got \[1.0, -1.0, 1.0\]$"),
     (lambda: L1(sigma=[[1.0]]), "^sigma must be"),
     (lambda: LevenbergMarquardt(max_steps=0), r"^max_steps must be an integer >= 1, got 0$"),
