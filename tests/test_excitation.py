@@ -16,15 +16,17 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import sedsabso_jax as sj
-from sedsabso_jax.excitation import (
-    ExcitationDesign,
+from sedsabso_jax import (
     FourierTrajectory,
     JointLimits,
+    design_excitation,
+    joint_limits_from_urdf,
+)
+from sedsabso_jax.excitation import (
+    ExcitationDesign,
     check_trajectory,
     coefficient_box,
     condition_number,
-    design_excitation,
-    joint_limits_from_urdf,
     sampling_margin,
     violations,
 )

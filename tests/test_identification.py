@@ -13,20 +13,22 @@ import pytest
 from conftest import random_dh
 
 import sedsabso_jax as sj
-from sedsabso_jax import baselines
-from sedsabso_jax.identification import (
+from sedsabso_jax import (
     L1,
     OLS,
     WLS,
     BoxSearch,
     Estimator,
-    FitProblem,
     LevenbergMarquardt,
     PhysicallyConsistent,
     TorqueModel,
+    baselines,
     identify,
     is_physically_consistent,
     validation_metrics,
+)
+from sedsabso_jax.identification import (
+    FitProblem,
 )
 
 KUKA_LIMITS = np.array([176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0])

@@ -14,16 +14,18 @@ import pytest
 import scipy.signal
 
 import sedsabso_jax as sj
+from sedsabso_jax import (
+    Measurements,
+    load_kuka_lwr4,
+    load_measurements,
+    simulate_measurements,
+    simulate_measurements_along,
+)
 from sedsabso_jax.identification._metrics import validation_metrics
 from sedsabso_jax.measurements import (
     DEFAULT_CUTOFF_HZ,
-    Measurements,
     differentiate,
-    load_kuka_lwr4,
-    load_measurements,
     lowpass,
-    simulate_measurements,
-    simulate_measurements_along,
 )
 
 DATA = resources.files("sedsabso_jax") / "data" / "kuka_lwr4"
