@@ -149,13 +149,20 @@ class SEDSABSO(BeetleSwarm):
                ) -> SwarmState:
         """The beetles' update; the guide becomes the swarm's best ``P_g`` if that is
         better (without annealing trials, the temperature then cools)."""
+        s, _ = self._absorb_guided(s, raw, diff, diff_bad)
+        if self.n_trials == 0:  # no annealing: BSO with a shrinking population
+            s = replace(s, temperature=s.temperature * self.decay)
+        return s
+
+    def _absorb_guided(self, s: SwarmState, raw: Array, diff: Array | None,
+                       diff_bad: Array | None
+                       ) -> tuple[SwarmState, Array]:
+        """:meth:`absorb` without the cooling; also returns ``P_g``."""
         s, (gx, gf) = self.absorb_beetles(s, raw, diff, diff_bad)
         swarm_better = gf < s.guide_f
         s = replace(s, guide_x=jnp.where(swarm_better, gx, s.guide_x),
                     guide_f=jnp.where(swarm_better, gf, s.guide_f))
-        if self.n_trials == 0:  # no annealing: BSO with a shrinking population
-            s = replace(s, temperature=s.temperature * self.decay)
-        return s
+        return s, gx
 
     def candidates(self, gx: Float[Array, " d"], r: Float[Array, "q d"], lower: Bounds,
                    upper: Bounds) -> Float[Array, "q d"]:
@@ -193,10 +200,7 @@ class SEDSABSO(BeetleSwarm):
         state = replace(state, x=x, v=v)
         if self.n_trials == 0:
             return self.finish(self.absorb(state, raw, diff, diff_bad))
-        state, (gx, gf) = self.absorb_beetles(state, raw, diff, diff_bad)
-        swarm_better = gf < state.guide_f
-        state = replace(state, guide_x=jnp.where(swarm_better, gx, state.guide_x),
-                        guide_f=jnp.where(swarm_better, gf, state.guide_f))
+        state, gx = self._absorb_guided(state, raw, diff, diff_bad)
         cand = self.candidates(gx, r, lower, upper)
         return self.finish(self.accept(state, cand, fitness.evaluate(cand), u))
 
