@@ -14,7 +14,7 @@ see ``sedsabso_jax.dynamics.chunk_size``); the JSON names the device.
 
     python -m benchmarks.regressor [--samples 10000] [--repeats 15] [--json out.json]
 
-Typical output (2-core CPU, see README):
+Typical output (2-core CPU, see docs/results/regressor.md):
 
     robot    samples  compile_s  jax_ms  pinocchio_ms  speedup  fill_ms
     RS010N     10000       1.9     ...

@@ -1,4 +1,5 @@
-"""Writing results: atomic files, plain JSON values, markdown tables, PNG figures.
+"""Writing results: atomic files, plain JSON values, markdown tables and their notes, PNG
+figures.
 
 Every file goes to a temporary file in the target's directory and is then renamed over the
 target. ``os.replace`` is atomic on POSIX and Windows within one file system, so a reader
@@ -12,12 +13,15 @@ import contextlib
 import json
 import math
 import os
+import re
 import tempfile
-from collections.abc import Callable
+import textwrap
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, BinaryIO
 
 import numpy as np
+from tabulate import tabulate
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -93,12 +97,41 @@ def write_json(path: PathLike, value: Any) -> Path:
     return write_text(path, to_json(value))
 
 
-def markdown_table(head: list[str], rows: list[list[str]]) -> str:
-    """A markdown table with columns padded to equal width."""
-    widths = [max(len(r[k]) for r in [head, *rows]) for k in range(len(head))]
-    fmt = lambda r: "| " + " | ".join(c.ljust(w) for c, w in zip(r, widths)) + " |"  # noqa: E731
-    return "\n".join([fmt(head), "|" + "|".join("-" * (w + 2) for w in widths) + "|",
-                      *(fmt(r) for r in rows)])
+#: A cell holding one real number (``"1.5"``, ``"-2e-06"``, ``"inf"``); integers are apart.
+_REAL = re.compile(r"[-+]?(\d+\.\d*(e[-+]?\d+)?|\.\d+(e[-+]?\d+)?|\d+e[-+]?\d+|inf|nan)",
+                   re.IGNORECASE)
+_INTEGER = re.compile(r"[-+]?\d+")
+
+
+def _alignment(column: Sequence[str]) -> str:
+    """``"right"`` for a column of real numbers (digits line up), else ``"left"``: text,
+    and integers such as row numbers and counts."""
+    cells = [c for c in column if c]
+    numeric = all(_REAL.fullmatch(c) or _INTEGER.fullmatch(c) for c in cells)
+    return "right" if cells and numeric and any(_REAL.fullmatch(c) for c in cells) else "left"
+
+
+def markdown_table(head: Sequence[str], rows: Sequence[Sequence[str]],
+                   align: Sequence[str] | None = None) -> str:
+    """A GitHub (pipe) markdown table, rendered by ``tabulate``. Cells are printed as given
+    (no number parsing: ``"0.0000"`` stays); ``align`` per column ``"left"``, ``"right"``
+    or ``"center"``, by default right for columns of real numbers and left for the rest."""
+    if align is None:
+        align = [_alignment([r[k] for r in rows]) for k in range(len(head))]
+    return tabulate([list(r) for r in rows], headers=list(head), tablefmt="pipe",
+                    disable_numparse=True, colalign=list(align))
+
+
+def columns_note(*definitions: tuple[str | Sequence[str], str], width: int = 90) -> str:
+    """The note under a table that defines its columns: ``"Columns: `a`: what a is; `b`,
+    `c`: what b and c are."``, wrapped to ``width``. Each definition is ``(header or
+    headers, text)``; every header is written exactly as in the table, in backticks."""
+    parts = []
+    for names, text in definitions:
+        names = [names] if isinstance(names, str) else list(names)
+        parts.append(", ".join(f"`{n}`" for n in names) + ": " + text)
+    return textwrap.fill("Columns: " + "; ".join(parts) + ".", width=width,
+                         break_long_words=False, break_on_hyphens=False)
 
 
 def pyplot() -> Any:

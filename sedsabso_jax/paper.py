@@ -9,7 +9,7 @@ Tables 2 and 3 describe the RS010N (:func:`sedsabso_jax.robots.rs010n` and
 paper's results, shown beside ours and never used in a computation.
 
 The paper's Eq. 3 and Table 5 "theoretical values" are not consistent with its Table 2
-under any reading (``docs/paper-notes.md``, Sec. 1): e.g. Table 5 writes
+under any reading (``docs/explanation/paper-notes.md``, Sec. 1): e.g. Table 5 writes
 ``I_2x + (m2 + m3) a2^2`` where Eq. 3 writes ``I_2x + (m2 + m3) a2``, and several rows use
 centre-of-mass coordinates where first moments belong.
 """

@@ -1,4 +1,5 @@
-"""The command line: the RS010N table, any URDF, errors as one line with exit status 2."""
+"""The command line: the RS010N table (``base-parameters``' default robot), any URDF,
+errors as one line with exit status 2."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_default_prints_rs010n_table(capsys):
-    assert main([]) == 0
+    assert main(["base-parameters"]) == 0
     out = capsys.readouterr().out
     assert "RS010N: 21 base parameters of 36" in out
     rows = [line for line in out.splitlines() if re.match(r"\| \d+ ", line)]
@@ -92,5 +93,5 @@ def test_readme_examples_run():
     assert namespace["x_best"].shape == (3,)
     assert namespace["r"].x.shape == (10, 21)
     assert float(namespace["floor"].f) <= float(namespace["r"].f.min())
-    # CMA-ES with SEDSABSO's budget ends far below it (README, "compare")
+    # CMA-ES with SEDSABSO's budget ends far below it (README, "Example")
     assert float(namespace["c"].f.max()) < 1e-3 * float(namespace["r"].f.min())

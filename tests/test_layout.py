@@ -15,8 +15,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1] / "sedsabso_jax"
 PACKAGE = "sedsabso_jax"
 
-#: Layer of each top-level part (README, "Layout"): a module may import only from lower
-#: layers or from its own part. Parts in one layer are independent of each other.
+#: Layer of each top-level part (docs/explanation/conventions.md, "Layout"): a module may
+#: import only from lower layers or from its own part. Parts in one layer are independent
+#: of each other.
 LAYERS = {
     "paper": 0, "_output": 0, "_deprecation": 0, "_version": 0, "_x64": 0,
     "dynamics": 1, "optim": 1,

@@ -1,5 +1,5 @@
 """One step of each swarm against a NumPy reference written out here from the equations
-(the paper's Eq. 10-16, ``docs/paper-notes.md``), with fixed draws: a wrong update rule,
+(the paper's Eq. 10-16, ``docs/explanation/paper-notes.md``), with fixed draws: a wrong update rule,
 sign, clamp, schedule or bookkeeping changes the numbers, not only the outcome.
 
 The reference never calls the package's swarm code: it takes the state before the step and

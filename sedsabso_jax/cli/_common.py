@@ -1,37 +1,100 @@
-"""What the subcommands share: argument types that say what they expected, the progress
-bar, and the check that outputs can be written before a long run."""
+"""What the subcommands share: their help's layout (argument groups, an epilog of examples
+and exit statuses), argument types that say what they expected, the progress bar, and the
+check that outputs can be written before a long run."""
 
 from __future__ import annotations
 
 import argparse
 import os
 import sys
-import time
-from collections.abc import Callable
-from typing import TextIO
+from collections.abc import Callable, Sequence
+from typing import Any, Self, TextIO
 
 from .._output import PathLike
 
+#: The exit statuses, as the help states them.
+EXIT_STATUS = ("exit status: 0 done; 1 a failure while running (solver, out of memory, an "
+               "unexpected error); 2 a usage error or bad input (flags, files, values); "
+               "130 interrupted")
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """Descriptions and epilogs wrapped paragraph by paragraph (blank lines apart), except
+    paragraphs with indented lines (examples), which keep their lines."""
+
+    def _fill_text(self, text: str, width: int, indent: str) -> str:
+        parts = []
+        for part in text.split("\n\n"):
+            parts.append("\n".join(indent + line for line in part.splitlines())
+                         if "\n " in part else super()._fill_text(part, width, indent))
+        return "\n\n".join(parts)
+
+
+def epilog(*examples: str) -> str:
+    """A subcommand's epilog: its examples (one command a line), then the exit statuses."""
+    lines = "\n".join(f"  {e}" for e in examples)
+    return f"examples:\n{lines}\n\n{EXIT_STATUS}"
+
+
+def subcommand(sub: argparse._SubParsersAction, name: str, *, help: str, description: str,
+               examples: Sequence[str]) -> argparse.ArgumentParser:
+    """A subcommand's parser with the shared help layout; its ``-h`` and ``--debug`` come
+    with :func:`add_run_options`, called after its other groups (the last group)."""
+    parser: argparse.ArgumentParser = sub.add_parser(
+        name, help=help, description=description, epilog=epilog(*examples),
+        formatter_class=HelpFormatter, add_help=False)
+    return parser
+
+
+def add_run_options(parser: argparse.ArgumentParser, config: str | None = None
+                    ) -> argparse._ArgumentGroup:
+    """The ``run`` group: ``--config`` (``config``: an example line of the file), ``--debug``
+    and ``-h``."""
+    group = parser.add_argument_group("run")
+    if config is not None:
+        group.add_argument("--config", metavar="FILE", default=None,
+                           help="read flags from a TOML (or YAML) file whose keys are the "
+                           f"flags' names without the dashes, - or _ alike ({config}); a "
+                           "flag given on the command line wins")
+    # SUPPRESS: a subcommand's --debug does not reset the one given before it
+    group.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                       help="show tracebacks on errors and warnings in full")
+    group.add_argument("-h", "--help", action="help", help="show this help and exit")
+    return group
+
 
 class Progress:
-    """A one-line progress bar on stderr, shown only when stderr is a terminal."""
+    """``progress(label, done, total)`` drawn as a tqdm bar on ``stream`` (stderr), off
+    when it is not a terminal; a new ``total`` starts a new bar. Close it (or use it as a
+    context manager) when the work ends."""
 
-    def __init__(self, stream: TextIO | None = None, width: int = 24):
-        self.stream = stream or sys.stderr
-        self.show = self.stream.isatty()
-        self.width = width
-        self.t0 = time.perf_counter()
+    def __init__(self, what: str, stream: TextIO | None = None, unit: str = "fit"):
+        self.what, self.unit = what, unit
+        self.stream = sys.stderr if stream is None else stream
+        self.bar: Any = None
 
     def __call__(self, label: str, done: int, total: int) -> None:
-        if not self.show:
-            return
-        k = round(self.width * done / total)
-        bar = "#" * k + "." * (self.width - k)
-        self.stream.write(f"\r[{bar}] {done}/{total} {time.perf_counter() - self.t0:5.1f} s "
-                          f"{label:<36}")
-        if done == total:
-            self.stream.write("\n")
-        self.stream.flush()
+        from tqdm import tqdm
+
+        if self.bar is None or self.bar.total != total:
+            self.close()
+            # initial: work done before (compare's finished problems) sets no pace
+            self.bar = tqdm(total=total, initial=done, desc=self.what, unit=self.unit,
+                            postfix=label, file=self.stream, disable=None,
+                            dynamic_ncols=True, leave=False)
+        self.bar.set_postfix_str(label, refresh=False)
+        self.bar.update(done - self.bar.n)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self.close()
 
 
 def number(kind: type[int] | type[float], minimum: float, strict: bool

@@ -11,10 +11,12 @@ import os
 from ._common import (
     BUILTIN_ROBOTS,
     Progress,
+    add_run_options,
     check_writable,
     non_negative_int,
     positive_float,
     positive_int,
+    subcommand,
 )
 
 #: ``--method``, ``--weights`` and ``--friction`` left to cross-validation.
@@ -116,11 +118,12 @@ def run(args: argparse.Namespace) -> None:
     if args.folds == 0 and len(frictions) * len(estimators) > 1:
         raise ValueError("--folds 0 turns cross-validation off, so nothing can be chosen by "
                          "it: give --method, --weights and --friction")
-    report = select_and_identify(robot, data, held_out=held_out, limits=limits,
-                                 transmission=transmission, estimators=estimators,
-                                 frictions=frictions, folds=args.folds,
-                                 physical=args.physical, prior_strength=args.prior_strength,
-                                 progress=Progress())
+    with Progress("identify") as progress:  # cross-validation fits, conic solves
+        report = select_and_identify(robot, data, held_out=held_out, limits=limits,
+                                     transmission=transmission, estimators=estimators,
+                                     frictions=frictions, folds=args.folds,
+                                     physical=args.physical,
+                                     prior_strength=args.prior_strength, progress=progress)
     settings = {"robot": args.robot, "data": os.path.abspath(args.data),
                 "validate": None if args.validate is None else os.path.abspath(args.validate),
                 "torque_limits": limits, "loading": {**load, "data_info": data.info},
@@ -131,75 +134,91 @@ def run(args: argparse.Namespace) -> None:
         print("written: " + ", ".join(written))
 
 
-def add_parser(sub: argparse._SubParsersAction, parents: list[argparse.ArgumentParser]
-               ) -> None:
-    """The ``identify`` subcommand's flags."""
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """The ``identify`` subcommand's flags, in groups."""
     from ..identification._fitting import Estimator
     from ..identification._model import FRICTION_TERMS
     from ..identification._validation import PRIOR_STRENGTHS
 
-    ip = sub.add_parser(
-        "identify", parents=parents,
+    ip = subcommand(
+        sub, "identify",
         help="identify a robot's base parameters from measured data",
         description="Identify base parameters from joint data (.npz with keys positions, "
         "velocities, accelerations, torques, times; or .csv with a header time,q1..,qd1..,"
-        "qdd1..,tau1..) and validate on held-out data.")
-    ip.add_argument("--robot", required=True,
-                    help=f"one of {', '.join(BUILTIN_ROBOTS)} or a .urdf file")
-    ip.add_argument("--tip", default=None, help="URDF tip link, for trees that branch")
-    ip.add_argument("--data", required=True, help="identification data (.npz or .csv)")
-    ip.add_argument("--validate", default=None, help="held-out data (.npz or .csv)")
-    ip.add_argument("--method", choices=(AUTO, *Estimator.registered()), default=AUTO,
-                    help="estimator; auto (default): OLS or WLS, chosen by cross-validation")
-    ip.add_argument("--friction", default=AUTO,
-                    help=f"torque model: terms of {', '.join(FRICTION_TERMS)} joined by +; "
-                    "auto (default): chosen by cross-validation among viscous-coulomb, "
-                    "+offset, +offset+armature, +offset+quadratic+smooth")
-    ip.add_argument("--weights", choices=WEIGHTS, default=AUTO,
-                    help="row weights per joint: residual (Gautier's two-step WLS), limits "
-                    "(1 / torque limit), equal; auto (default): chosen by cross-validation")
-    ip.add_argument("--folds", type=non_negative_int, default=5,
-                    help="cross-validation folds over the motion's phase (5); they choose "
-                    "what is auto and report the error on motion not fitted; 0: off")
-    ip.add_argument("--motor-side", action="store_true",
-                    help="--data and --validate hold motor angles and motor torques (or "
-                    "currents, with --drive-gains): converted with --gear-ratios")
-    ip.add_argument("--gear-ratios", default=None,
-                    help="motor turns per joint turn, one per joint, comma-separated")
-    ip.add_argument("--coupling", action="append", default=None, metavar="M:J=RATIO",
-                    help="motor M also turns with joint J at RATIO (repeatable), e.g. 6:5=32")
-    ip.add_argument("--position-offsets", default=None,
-                    help="joint position of each encoder zero [rad], comma-separated")
-    ip.add_argument("--drive-gains", default=None,
-                    help="motor torque per unit of recorded current, one per motor")
-    ip.add_argument("--physical", action="store_true",
-                    help="physically consistent parameters (OLS/WLS): positive-definite "
-                    "pseudo-inertia per link, friction >= 0")
-    ip.add_argument("--prior-strength", type=_prior_strength, default=0.0, metavar="S|cv",
-                    help="with --physical: pull toward the robot's a-priori parameters, in "
-                    "multiples of the data term's mean curvature (0), or 'cv' to choose it "
-                    "by cross-validation from " + ", ".join(f"{v:g}" for v in PRIOR_STRENGTHS))
-    ip.add_argument("--runs", type=positive_int, default=1,
-                    help="swarm runs, the best kept (1)")
-    ip.add_argument("--iterations", type=positive_int, default=600,
-                    help="swarm iterations (600)")
-    ip.add_argument("--seed", type=non_negative_int, default=0, help="random seed (0)")
-    ip.add_argument("--cutoff-hz", type=positive_float, default=None,
-                    help="low-pass cutoff where velocities/accelerations are derived or "
-                    "torques filtered (default 10 Hz)")
-    ip.add_argument("--filter-torques", action="store_true", help="low-pass the torques")
-    ip.add_argument("--downsample", type=positive_int, default=1,
-                    help="keep every k-th sample after filtering (1)")
-    ip.add_argument("--resample-hz", type=positive_float, default=None,
-                    help="interpolate onto a uniform grid at this rate first (irregular logs)")
-    ip.add_argument("--keep-edges", action="store_true",
-                    help="keep the first and last 2 / cutoff seconds, where derived signals "
-                    "show the filter's edge transients (dropped by default)")
-    ip.add_argument("--json", default=None,
-                    help="write the results JSON to this path (its directory is created)")
-    ip.add_argument("--out", default=None,
-                    help="directory for torque plots and identification.json (created)")
-    ip.add_argument("--urdf-out", default=None,
-                    help="write the robot's URDF with the identified link parameters and "
-                    "joint friction (needs --physical)")
+        "qdd1..,tau1..) and validate on held-out data. What is left 'auto' is chosen by "
+        "cross-validation. Flags may also come from a --config file; the command line wins.",
+        examples=["sedsabso-jax identify --robot kuka_lwr4 --data run1.npz --validate "
+                  "run2.npz",
+                  "sedsabso-jax identify --config identify.toml --physical --out results"])
+    inp = ip.add_argument_group("input", "the robot, its data, and how the data are loaded")
+    inp.add_argument("--robot", metavar="NAME|URDF", required=True,
+                     help=f"one of {', '.join(BUILTIN_ROBOTS)} or a .urdf file")
+    inp.add_argument("--tip", metavar="LINK", default=None,
+                     help="URDF tip link, for trees that branch")
+    inp.add_argument("--data", metavar="FILE", required=True,
+                     help="identification data (.npz or .csv)")
+    inp.add_argument("--cutoff-hz", metavar="HZ", type=positive_float, default=None,
+                     help="low-pass cutoff where velocities/accelerations are derived or "
+                     "torques filtered (default 10 Hz)")
+    inp.add_argument("--filter-torques", action="store_true", help="low-pass the torques")
+    inp.add_argument("--downsample", metavar="K", type=positive_int, default=1,
+                     help="keep every k-th sample after filtering (1)")
+    inp.add_argument("--resample-hz", metavar="HZ", type=positive_float, default=None,
+                     help="interpolate onto a uniform grid at this rate first (irregular "
+                     "logs)")
+    inp.add_argument("--keep-edges", action="store_true",
+                     help="keep the first and last 2 / cutoff seconds, where derived "
+                     "signals show the filter's edge transients (dropped by default)")
+    motors = ip.add_argument_group("motors", "data recorded on the motor side")
+    motors.add_argument("--motor-side", action="store_true",
+                        help="--data and --validate hold motor angles and motor torques (or "
+                        "currents, with --drive-gains): converted with --gear-ratios")
+    motors.add_argument("--gear-ratios", metavar="LIST", default=None,
+                        help="motor turns per joint turn, one per joint, comma-separated")
+    motors.add_argument("--coupling", action="append", default=None, metavar="M:J=RATIO",
+                        help="motor M also turns with joint J at RATIO (repeatable), e.g. "
+                        "6:5=32")
+    motors.add_argument("--position-offsets", metavar="LIST", default=None,
+                        help="joint position of each encoder zero [rad], comma-separated")
+    motors.add_argument("--drive-gains", metavar="LIST", default=None,
+                        help="motor torque per unit of recorded current, one per motor")
+    model = ip.add_argument_group("torque model")
+    model.add_argument("--friction", metavar="TERMS", default=AUTO,
+                       help=f"terms of {', '.join(FRICTION_TERMS)} joined by +; auto "
+                       "(default): chosen by cross-validation among viscous-coulomb, "
+                       "+offset, +offset+armature, +offset+quadratic+smooth")
+    est = ip.add_argument_group("estimator")
+    est.add_argument("--method", choices=(AUTO, *Estimator.registered()), default=AUTO,
+                     help="estimator; auto (default): OLS or WLS, chosen by cross-validation")
+    est.add_argument("--weights", choices=WEIGHTS, default=AUTO,
+                     help="row weights per joint: residual (Gautier's two-step WLS), limits "
+                     "(1 / torque limit), equal; auto (default): chosen by cross-validation")
+    est.add_argument("--physical", action="store_true",
+                     help="physically consistent parameters (OLS/WLS): positive-definite "
+                     "pseudo-inertia per link, friction >= 0")
+    est.add_argument("--prior-strength", type=_prior_strength, default=0.0, metavar="S|cv",
+                     help="with --physical: pull toward the robot's a-priori parameters, in "
+                     "multiples of the data term's mean curvature (0), or 'cv' to choose it "
+                     "by cross-validation from " + ", ".join(f"{v:g}" for v in PRIOR_STRENGTHS))
+    est.add_argument("--runs", metavar="N", type=positive_int, default=1,
+                     help="swarm runs, the best kept (1)")
+    est.add_argument("--iterations", metavar="N", type=positive_int, default=600,
+                     help="swarm iterations (600)")
+    est.add_argument("--seed", metavar="N", type=non_negative_int, default=0,
+                     help="random seed (0)")
+    val = ip.add_argument_group("validation")
+    val.add_argument("--validate", metavar="FILE", default=None,
+                     help="held-out data (.npz or .csv): judges the fit, never chooses it")
+    val.add_argument("--folds", metavar="K", type=non_negative_int, default=5,
+                     help="cross-validation folds over the motion's phase (5); they choose "
+                     "what is auto and report the error on motion not fitted; 0: off")
+    out = ip.add_argument_group("outputs", "written atomically: a failed run leaves none")
+    out.add_argument("--json", metavar="PATH", default=None,
+                     help="write the results JSON to this path (its directory is created)")
+    out.add_argument("--out", metavar="DIR", default=None,
+                     help="directory for torque plots and identification.json (created)")
+    out.add_argument("--urdf-out", metavar="PATH", default=None,
+                     help="write the robot's URDF with the identified link parameters and "
+                     "joint friction (needs --physical)")
+    add_run_options(ip, config="prior_strength = 1e-3")
     ip.set_defaults(func=run)

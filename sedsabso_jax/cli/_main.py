@@ -6,11 +6,13 @@
 * ``sedsabso-jax compare``: optimisers compared on BBOB and identification problems
   (:mod:`._compare`);
 * ``sedsabso-jax base-parameters --robot PATH.urdf``: a robot's base-parameter table
-  (``sedsabso-jax`` alone: the paper robot's, RS010N).
+  (:mod:`._base_parameters`; the paper robot's, RS010N, by default).
 
-Bad input exits with status 2 and one line on stderr (``--debug`` shows the traceback);
-warnings are one line each on stderr; result files are written atomically, so a failed
-run leaves none.
+``sedsabso-jax`` alone prints the help. Errors are one line on stderr (``--debug`` shows
+the traceback), with exit status 2 for usage errors and bad input, 1 for a failure while
+running (:func:`main`); warnings are one line each on stderr; result files are written
+atomically, so a failed run leaves none. ``--config FILE`` (:mod:`._config`) reads flags
+from a file.
 """
 
 from __future__ import annotations
@@ -21,24 +23,27 @@ import sys
 import warnings
 from typing import NoReturn
 
+from .._version import __version__
+from . import _base_parameters as base_parameters_command
 from . import _compare as compare_command
+from . import _config as config
 from . import _identify as identify_command
 from ._common import (
-    BUILTIN_ROBOTS,
+    EXIT_STATUS,
+    HelpFormatter,
     Progress,
+    add_run_options,
     check_writable,
     non_negative_float,
     non_negative_int,
     positive_int,
+    subcommand,
 )
 
-
-def _cmd_base_parameters(args) -> None:
-    from ..dynamics import _robots as robots
-    from ..reproduce._report import base_parameter_table
-
-    robot = robots.load(args.robot, args.tip)
-    print(base_parameter_table(robot, paper_columns=args.robot == "rs010n"))
+#: Exceptions that mean bad input (exit status 2); other exceptions are failures while
+#: running (1). jaxlib's XlaRuntimeError (out of memory, ...) is a RuntimeError.
+USAGE_ERRORS = (ValueError, TypeError, FileNotFoundError, IsADirectoryError,
+                NotADirectoryError, PermissionError)
 
 
 def _cmd_reproduce(args) -> None:
@@ -51,7 +56,8 @@ def _cmd_reproduce(args) -> None:
                                    design_iterations=args.design_iterations)
     settings.check()
     check_writable(args.out, args.json)
-    exp = experiment.run(settings, progress=Progress())
+    with Progress("reproduce", unit="step") as progress:
+        exp = experiment.run(settings, progress=progress)
     written = report.write_outputs(exp, args.out, args.json)
     print(report.table4(exp.results))
     print("written: " + ", ".join(written))
@@ -64,54 +70,57 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    common = _Parser(add_help=False)
-    # SUPPRESS: a subcommand's --debug does not reset the one given before it
-    common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                        help="show tracebacks on errors and warnings in full")
-    parser = _Parser(
-        prog="sedsabso-jax",
-        description="Identify robot dynamic parameters (SEDSABSO, JAX). Without a command: "
-        "print the RS010N base-parameter table.",
-    )
-    parser.add_argument("--debug", action="store_true",
-                        help="show tracebacks on errors and warnings in full")
-    sub = parser.add_subparsers(dest="command", parser_class=_Parser)
-    bp = sub.add_parser("base-parameters", parents=[common],
-                        help="print a robot's base-parameter table")
-    bp.add_argument("--robot", default="rs010n",
-                    help=f"one of {', '.join(BUILTIN_ROBOTS)} or a .urdf file (default rs010n)")
-    bp.add_argument("--tip", default=None, help="URDF tip link, for trees that branch")
-    bp.set_defaults(func=_cmd_base_parameters)
-
-    rp = sub.add_parser(
-        "reproduce", parents=[common],
+def _add_reproduce(sub: argparse._SubParsersAction) -> None:
+    rp = subcommand(
+        sub, "reproduce",
         help="re-run the paper's experiment (Tables 4-5, Figures 5-6)",
         description="Re-run the paper's experiment on the RS010N: base parameters, excitation "
         "design (Eq. 9), simulated torques, SEDSABSO / BSO / LDWPSO with the paper's settings "
-        "beside OLS, Levenberg-Marquardt and the exact L1 optimum.")
-    rp.add_argument("--runs", type=positive_int, default=10, help="runs per swarm (10)")
-    rp.add_argument("--iterations", type=positive_int, default=600,
-                    help="iterations per run (600)")
-    rp.add_argument("--samples", type=positive_int, default=1000,
-                    help="samples over the 10 s excitation period (1000, i.e. 100 Hz)")
-    rp.add_argument("--noise", type=non_negative_float, default=0.0,
-                    help="Gaussian torque noise, std relative to each joint's RMS torque (0)")
-    rp.add_argument("--scenario", choices=("paper", "prior"), default="paper",
-                    help="search box: around the true values (paper) or a 30%%-off prior")
-    rp.add_argument("--seed", type=non_negative_int, default=0, help="random seed (0)")
-    rp.add_argument("--dtype", choices=("float64", "float32"), default="float64",
-                    help="precision of the swarms (float64)")
-    rp.add_argument("--design-iterations", type=positive_int, default=None,
-                    help="iterations of the excitation design swarm (the module's default, 100)")
-    rp.add_argument("--out", default="reproduce-results",
-                    help="directory for tables, figures and results.json (reproduce-results)")
-    rp.add_argument("--json", default=None, help="also write results.json to this path")
+        "beside OLS, Levenberg-Marquardt and the exact L1 optimum.",
+        examples=["sedsabso-jax reproduce", "sedsabso-jax reproduce --runs 3 --iterations "
+                  "200 --noise 0.02 --out quick"])
+    exp = rp.add_argument_group("experiment")
+    exp.add_argument("--runs", type=positive_int, default=10, help="runs per swarm (10)")
+    exp.add_argument("--iterations", type=positive_int, default=600,
+                     help="iterations per run (600)")
+    exp.add_argument("--samples", type=positive_int, default=1000,
+                     help="samples over the 10 s excitation period (1000, i.e. 100 Hz)")
+    exp.add_argument("--noise", type=non_negative_float, default=0.0,
+                     help="Gaussian torque noise, std relative to each joint's RMS torque (0)")
+    exp.add_argument("--scenario", choices=("paper", "prior"), default="paper",
+                     help="search box: around the true values (paper) or a 30%%-off prior")
+    exp.add_argument("--seed", type=non_negative_int, default=0, help="random seed (0)")
+    exp.add_argument("--dtype", choices=("float64", "float32"), default="float64",
+                     help="precision of the swarms (float64)")
+    exp.add_argument("--design-iterations", type=positive_int, default=None,
+                     help="iterations of the excitation design swarm (the module's default, "
+                     "100)")
+    out = rp.add_argument_group("outputs")
+    out.add_argument("--out", default="reproduce-results",
+                     help="directory for tables, figures and results.json (reproduce-results)")
+    out.add_argument("--json", default=None, help="also write results.json to this path")
+    add_run_options(rp, config="design-iterations = 50")
     rp.set_defaults(func=_cmd_reproduce)
 
-    compare_command.add_parser(sub, [common])
-    identify_command.add_parser(sub, [common])
-    parser.set_defaults(func=_cmd_base_parameters, robot="rs010n", tip=None)
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="sedsabso-jax", formatter_class=HelpFormatter,
+        description="Identify robot dynamic parameters (SEDSABSO, JAX): a robot's base "
+        "parameters, identification from measured data, the paper's experiment, and "
+        "optimisers compared. 'sedsabso-jax COMMAND --help' shows a command's flags.",
+        epilog="examples:\n  sedsabso-jax base-parameters --robot kuka_lwr4\n"
+        "  sedsabso-jax identify --robot kuka_lwr4 --data run1.npz --validate run2.npz\n\n"
+        f"{EXIT_STATUS}")
+    parser.add_argument("--version", action="version", version=f"sedsabso-jax {__version__}")
+    parser.add_argument("--debug", action="store_true",
+                        help="show tracebacks on errors and warnings in full")
+    sub = parser.add_subparsers(dest="command", parser_class=_Parser, title="commands",
+                                metavar="COMMAND")
+    base_parameters_command.add_parser(sub)
+    _add_reproduce(sub)
+    compare_command.add_parser(sub)
+    identify_command.add_parser(sub)
     return parser
 
 
@@ -143,14 +152,27 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
     print(f"sedsabso-jax: warning: {text}", file=sys.stderr if file is None else file)
 
 
+def _one_line(err: BaseException) -> str:
+    """The error's message on one line (XLA's run over many: the first), else its type."""
+    lines = [line.strip() for line in str(err).splitlines() if line.strip()]
+    return lines[0] if lines else type(err).__name__
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run the command; returns the exit status: 0 done, 1 a failure while running
+    (RuntimeError, e.g. a solver's or XLA's out of memory; MemoryError; anything
+    unexpected), 2 a usage error or bad input (:data:`USAGE_ERRORS`; argparse exits with
+    2 itself), 130 interrupted. Each error is one line on stderr; ``--debug`` raises it."""
     import jax
 
     # an application: the command turns JAX's 64-bit mode on for itself (the library never
     # does, sedsabso_jax/_x64.py), before any JAX work
     jax.config.update("jax_enable_x64", True)
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = config.parse_args(parser, sys.argv[1:] if argv is None else argv)
+    if args.command is None:
+        parser.print_help()
+        return 0
     if args.command in ("reproduce", "identify", "compare"):
         _enable_compilation_cache()
     try:
@@ -162,11 +184,27 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into e.g. `head`: stop quietly (Python docs recipe)
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 1
-    except (ValueError, TypeError, OSError, RuntimeError) as err:
+    except KeyboardInterrupt:
+        if args.debug:
+            raise
+        print("sedsabso-jax: interrupted", file=sys.stderr)
+        return 130
+    except USAGE_ERRORS as err:
         if args.debug:
             raise
         print(f"sedsabso-jax: error: {err}", file=sys.stderr)
         return 2
+    except (RuntimeError, MemoryError) as err:
+        if args.debug:
+            raise
+        print(f"sedsabso-jax: error: {_one_line(err)}", file=sys.stderr)
+        return 1
+    except Exception as err:  # unexpected: say what it was, --debug shows where
+        if args.debug:
+            raise
+        print(f"sedsabso-jax: error: {type(err).__name__}: {_one_line(err)} (--debug shows "
+              f"the traceback)", file=sys.stderr)
+        return 1
     return 0
 
 

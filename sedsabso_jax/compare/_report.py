@@ -15,7 +15,15 @@ from typing import TYPE_CHECKING
 import jax
 import numpy as np
 
-from .._output import PathLike, markdown_table, pyplot, save_figure, to_json, write_text
+from .._output import (
+    PathLike,
+    columns_note,
+    markdown_table,
+    pyplot,
+    save_figure,
+    to_json,
+    write_text,
+)
 from ._statistics import ALPHA, ecdf, effect_size_label, pairwise, summary
 
 if TYPE_CHECKING:
@@ -88,8 +96,8 @@ def render(docs: list[dict], settings: dict, seconds: float | None = None) -> tu
                                            if seconds else ""), ""]
     lines += ["Precision: `f - f_opt` on BBOB (evosax's instances, runs spread evenly over "
               "them); on identification problems the excess over the exact L1 optimum in "
-              "the box as a share of the torques' L1 norm, `(f - f_opt) / sum |tau|`. "
-              "Best: lowest median final precision. Significance: "
+              "the box as a share of the torques' L1 norm, `(f - f_opt) / sum |tau|`; no "
+              "unit either way. Best: lowest median final precision. Significance: "
               f"two-sided Mann-Whitney U, Holm-corrected over all pairs of a problem, "
               f"alpha = {ALPHA}; A12: probability that a run of the first ends below a "
               "run of the second.", ""]
@@ -98,16 +106,19 @@ def render(docs: list[dict], settings: dict, seconds: float | None = None) -> tu
     groups: dict[str, list] = {}
     for s in all_stats:
         groups.setdefault(_group(s), []).append(s)
-    head = ["problems", *[labels[a] for a in algorithms]]
+    names = [labels[a] for a in algorithms]
     rows = []
     for g, ss in groups.items():
         wins = {a: sum(s["best"] == a for s in ss) for a in algorithms}
         rows.append([f"{g} ({len(ss)})", *[str(wins[a]) for a in algorithms]])
-    lines += ["## Best algorithm: problems won (lowest median)", "", markdown_table(head, rows),
-              ""]
+    lines += ["## Best algorithm: problems won (lowest median)", "",
+              markdown_table(["problems", *names], rows), "", columns_note(
+                  ("problems", "a group of problems (BBOB at dimension d, or the "
+                   "identification problems), their number in parentheses"),
+                  (names, "the problems of the group on which the algorithm has the lowest "
+                   "median final precision (ties: the lower mean)")), ""]
     if "SEDSABSO" in algorithms and versus:
-        head = ["problems", *[f"SEDSABSO vs {labels[p]}: better / n.s. / worse"
-                              for p in versus]]
+        head = [f"SEDSABSO vs {labels[p]}: better / n.s. / worse" for p in versus]
         rows = []
         for g, ss in groups.items():
             cells = []
@@ -118,11 +129,15 @@ def render(docs: list[dict], settings: dict, seconds: float | None = None) -> tu
                 cells.append(f"{better} / {len(ts) - better - worse} / {worse}")
             rows.append([g, *cells])
         lines += ["## SEDSABSO against BSO and PSO (significant at 0.05 after Holm)", "",
-                  markdown_table(head, rows), ""]
+                  markdown_table(["problems", *head], rows), "", columns_note(
+                      ("problems", "a group of problems"),
+                      (head, "the numbers of its problems on which SEDSABSO ends significantly "
+                       "lower (better), not significantly different (n.s.) and significantly "
+                       "higher (worse), by the test above")), ""]
 
     # per-problem table
-    head = ["problem", "best", *[f"{labels[a]} median [IQR]" for a in algorithms],
-            *[f"SEDSABSO vs {labels[p]}" for p in versus if "SEDSABSO" in algorithms]]
+    medians = [f"{labels[a]} median [IQR]" for a in algorithms]
+    against = [f"SEDSABSO vs {labels[p]}" for p in versus if "SEDSABSO" in algorithms]
     rows = []
     for s in all_stats:
         cells = []
@@ -135,7 +150,20 @@ def render(docs: list[dict], settings: dict, seconds: float | None = None) -> tu
         vs = ([_verdict(s, "SEDSABSO", p, labels) for p in versus]
               if "SEDSABSO" in algorithms else [])
         rows.append([s["problem"], best, *cells, *vs])
-    lines += ["## Every problem: final precision", "", markdown_table(head, rows), ""]
+    notes = [("problem", "the problem's name"),
+             ("best", "the algorithm with the lowest median final precision (tied: those "
+              "not significantly different from it)"),
+             (medians, "median [interquartile range q3 - q1] of the final precision over "
+              "the runs, in bold for the best (inf: runs that ended on non-finite values)")]
+    if against:
+        notes.append((against, "`better` or `worse` where SEDSABSO ends significantly lower "
+                      "or higher, with the Holm-adjusted p and A12, the probability that a "
+                      "SEDSABSO run ends below a run of the other (ties half), in Vargha and "
+                      "Delaney's words (negligible, small, medium, large from |A12 - 0.5| of "
+                      "0, 0.06, 0.14, 0.21), else `n.s.` (not significant) with its p"))
+    lines += ["## Every problem: final precision", "",
+              markdown_table(["problem", "best", *medians, *against], rows), "",
+              columns_note(*notes), ""]
     lines += ["Figures: `ecdf_*.png`, the share of (run, target) pairs reached against "
               "fitness evaluations / dimension (COCO's run-length ECDF); targets 1e2 .. 1e-8 "
               "on BBOB, 1 .. 1e-8 (relative) on identification.", ""]

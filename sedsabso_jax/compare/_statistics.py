@@ -7,8 +7,9 @@ is better), as reviewers of optimisation papers expect them.
   multiple comparisons of one problem by Holm's step-down method (S. Holm, "A simple
   sequentially rejective multiple test procedure", Scand. J. Statist. 6, 1979);
 - effect size: Vargha and Delaney's A12 (J. Educ. Behav. Stat. 25(2), 2000), here the
-  probability that a run of A ends BELOW a run of B, ties counting half: 0.5 is no effect,
-  0.56 / 0.64 / 0.71 small / medium / large (their thresholds);
+  probability that a run of A ends BELOW a run of B, ties counting half (read off scipy's
+  Mann-Whitney U): 0.5 is no effect, 0.56 / 0.64 / 0.71 small / medium / large (their
+  thresholds);
 - run length: evaluations a run needs to reach a target precision, and their empirical
   cumulative distribution over (run, target) pairs (COCO's ECDF of run lengths:
   N. Hansen et al., "COCO: performance assessment", arXiv:1605.03560).
@@ -40,16 +41,22 @@ def summary(values: Float[ArrayLike, " runs"] | Sequence[float]) -> dict:
 def a12(a: Float[ArrayLike, " runs_a"] | Sequence[float],
         b: Float[ArrayLike, " runs_b"] | Sequence[float]) -> float:
     """Vargha-Delaney A12: ``P(a < b) + P(a == b) / 2`` over all pairs of a run of ``a``
-    and a run of ``b`` (minimisation: above 0.5 means ``a`` tends to end lower)."""
+    and a run of ``b`` (minimisation: above 0.5 means ``a`` tends to end lower).
+
+    Read off the Mann-Whitney U of ``(b, a)``: scipy's U of ``(x, y)`` counts the pairs
+    with ``x > y``, ties half, so ``U(b, a) / (n_a n_b)`` is this A12."""
     a, b = np.asarray(a, dtype=float).ravel(), np.asarray(b, dtype=float).ravel()
-    ranks = scipy.stats.rankdata(np.concatenate([-a, -b]))  # larger is better after negation
-    r_a = ranks[: a.size].sum()
-    return float((r_a - a.size * (a.size + 1) / 2) / (a.size * b.size))
+    u = scipy.stats.mannwhitneyu(b, a, alternative="two-sided").statistic
+    return float(u / (a.size * b.size))
 
 
 def holm(p_values: Float[ArrayLike, " m"] | Sequence[float]) -> Float[np.ndarray, " m"]:
     """Holm's step-down adjusted p-values (reject where adjusted p <= alpha); they control
-    the family-wise error rate over the family of tests given."""
+    the family-wise error rate over the family of tests given.
+
+    Kept here rather than statsmodels' ``multipletests(p, method="holm")``, which gives the
+    same values (tests/test_compare_statistics.py compares them): statsmodels is a large
+    dependency for these few lines, and scipy has no Holm correction."""
     p = np.asarray(p_values, dtype=float)
     order = np.argsort(p, kind="stable")
     m = p.size
@@ -112,6 +119,11 @@ def run_lengths(precision_history: Float[ArrayLike, "runs iterations"],
 
 def ecdf(run_lengths_: Float[ArrayLike, "*shape"], grid: Float[ArrayLike, " g"]
          ) -> Float[np.ndarray, " g"]:
-    """Share of (run, target) pairs reached within each evaluation count of ``grid``."""
+    """Share of (run, target) pairs reached within each evaluation count of ``grid``.
+
+    Not ``scipy.stats.ecdf``: it refuses the ``inf`` of a target never reached, and those
+    pairs belong in the denominator (COCO's convention); as right-censored data it would
+    be a Kaplan-Meier estimate, another quantity. On finite run lengths the two agree
+    (tests/test_compare_statistics.py)."""
     r = np.asarray(run_lengths_, dtype=float).ravel()
     return np.array([np.mean(r <= g) for g in np.asarray(grid, dtype=float)])

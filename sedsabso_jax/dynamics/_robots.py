@@ -111,7 +111,7 @@ def from_dh(d: _Column, a: _Column, alpha: _Column, theta: _Column = 0.0,
 def rs010n() -> Robot:
     """The paper's robot: first three joints of the Kawasaki RS010N (Section 2, Tables 1-2).
 
-    Modified DH as read in ``docs/paper-notes.md`` Sec. 1: joint 1 vertical,
+    Modified DH as read in ``docs/explanation/paper-notes.md`` Sec. 1: joint 1 vertical,
     ``alpha = (0, -pi/2, 0)``, ``a = (0, 0.350, 1.035)`` m, ``d = 0``. Table 1 lists
     ``alpha_{i-1}, a_{i-1}`` one row early; read literally, joint 1 would be horizontal.
     Parameters: Table 2 (:data:`sedsabso_jax.paper.TABLE2`), first moments ``m * (x, y, z)``

@@ -1,7 +1,7 @@
 """Excitation trajectories: a finite Fourier series per joint, the paper's Eq. 5-7.
 
-Per joint (``docs/paper-notes.md`` Sec. 2; Eq. 5's printed signs are garbled, so ``q`` is
-the integral and ``qdd`` the derivative of Eq. 6)::
+Per joint (``docs/explanation/paper-notes.md`` Sec. 2; Eq. 5's printed signs are garbled, so
+``q`` is the integral and ``qdd`` the derivative of Eq. 6)::
 
     qd(t)  = sum_k  a_k cos(k wf t) - b_k sin(k wf t)                        (Eq. 6)
     q(t)   = q0 + sum_k  a_k / (k wf) sin(k wf t) + b_k / (k wf) cos(k wf t) (Eq. 7)

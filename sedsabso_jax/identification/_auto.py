@@ -12,7 +12,7 @@ judge the fit on held-out data::
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -23,7 +23,7 @@ from ..dynamics._robot import Robot
 from ..measurements._container import Measurements
 from ..measurements._transmission import TransmissionLike
 from ._estimators import OLS, BoxSearch, PhysicallyConsistent
-from ._fitting import Estimator, Limits, Sigma
+from ._fitting import Estimator, Limits, ProgressCallback, Sigma
 from ._identify import Data, identify, torque_model
 from ._model import TorqueModel
 from ._report import IdentificationReport
@@ -75,14 +75,32 @@ def estimator_candidates(method: str | None = None, sigma: Sigma = AUTO, **optio
                  if s is not None or first.default_weighting == "equal")
 
 
+class _Stages:
+    """One ``progress(label, done, total)`` over the stages of a call: each stage reports
+    its own fits (1..its total) and is told how many fits the stages after it make."""
+
+    def __init__(self, progress: ProgressCallback | None):
+        self.progress, self.done = progress, 0
+
+    def stage(self, later: int) -> ProgressCallback | None:
+        if self.progress is None:
+            return None
+        report, start = self.progress, self.done
+
+        def step(label: str, done: int, total: int) -> None:
+            self.done = start + done
+            report(label, self.done, start + total + later)
+
+        return step
+
+
 def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = None,
                         limits: Limits = None, transmission: TransmissionLike = None,
                         estimators: Estimator | Iterable[Estimator] | None = None,
                         frictions: str | Iterable[str | TorqueModel] | None = None,
                         folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS, physical: bool = False,
                         prior_strength: float | str = 0.0, base: BaseParameters | None = None,
-                        progress: Callable[[str, int, int], object] | None = None
-                        ) -> IdentificationReport:
+                        progress: ProgressCallback | None = None) -> IdentificationReport:
     """Identify ``robot`` from ``data`` as ``sedsabso-jax identify`` does by default.
 
     1. Model choice: every estimator of ``estimators`` (default
@@ -105,8 +123,10 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
     qdd, tau)``; ``folds``: a count, or fold labels (one integer per sample); ``limits``:
     per-joint torque limits (the NRMS measure and the 1/limit weighting; candidates
     weighting by them are skipped without); ``transmission``, ``base``: as in
-    :func:`~._identify.identify`; ``progress(label, done, total)`` after each candidate's
-    cross-validation. Returns the :class:`~._report.IdentificationReport` the command
+    :func:`~._identify.identify`; ``progress(label, done, total)``: called after each fit
+    (each fold of each candidate's cross-validation, each fold of each prior strength's,
+    then the fit on all of ``data``), ``done`` running 1..``total`` over the whole call
+    (None: quiet). Returns the :class:`~._report.IdentificationReport` the command
     prints (``text()``) and writes (``write(...)``)."""
     # a tuple's arrays go to Measurements, whose __post_init__ converts them
     data = data if isinstance(data, Measurements) else Measurements(*data)  # type: ignore[arg-type]
@@ -136,30 +156,41 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
                          "give one estimator and one friction model")
     base = base_parameters(robot) if base is None else base
     common: dict[str, Any] = dict(limits=limits, transmission=transmission, base=base)
+    # fits after the model choice: the prior's cross-validation (its cross-validation
+    # replaces the model's, which is then not run), then the fit on all the data
+    n_folds = 0 if off else int(np.max(folds)) + (np.ndim(folds) == 1)
+    refit = physical and (prior_strength == "cv" or bool(prior_strength)) and not off
+    later = 1 + (len(PRIOR_STRENGTHS) * n_folds if prior_strength == "cv" else
+                 n_folds if refit else 0)
+    stages = _Stages(progress)
     selection = cv = None
     model: TorqueModel | str
     if choose:
         selection = select_model(robot, data, estimators=estimators, frictions=frictions,
-                                 folds=folds, progress=progress, **common)
+                                 folds=folds, progress=stages.stage(later), **common)
         estimator, model = selection.estimator, selection.model
         cv = selection.cross_validation
     else:
         estimator, model = estimators[0], frictions[0]
         if not isinstance(model, TorqueModel):
             model = torque_model(robot, model, transmission=transmission, base=base)
-        if not off:
-            cv = cross_validate(robot, data, estimator, model, folds=folds, limits=limits)
+        if not off and not refit:
+            cv = cross_validate(robot, data, estimator, model, folds=folds, limits=limits,
+                                progress=stages.stage(later))
     prior_selection = None
     if physical and prior_strength == "cv":
         prior_selection = choose_prior_strength(robot, data, estimator, model,
                                                 strengths=PRIOR_STRENGTHS, folds=folds,
-                                                limits=limits)
+                                                limits=limits, progress=stages.stage(1))
         estimator, cv = prior_selection.estimator, prior_selection.cross_validation
     elif physical:
         estimator = dataclasses.replace(estimator,  # type: ignore[type-var]
                                         prior_strength=float(prior_strength))
-        if prior_strength and not off:
-            cv = cross_validate(robot, data, estimator, model, folds=folds, limits=limits)
+        if refit:
+            cv = cross_validate(robot, data, estimator, model, folds=folds, limits=limits,
+                                progress=stages.stage(1))
     ident = identify(robot, data, estimator, model, limits=limits)
+    if progress is not None:
+        progress("fit on all the data", stages.done + 1, stages.done + 1)
     return IdentificationReport.evaluate(ident, data, held_out, limits, cross_validation=cv,
                                          selection=selection, prior_selection=prior_selection)

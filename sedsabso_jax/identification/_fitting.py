@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import abc
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, ClassVar, TypeAlias
 
 import numpy as np
@@ -31,6 +31,9 @@ _NAMED: dict[str, type[Estimator]] = {}
 Sigma: TypeAlias = str | Sequence[float] | Float[ArrayLike, " n"] | None
 #: Per-joint torque limits (N m), or None where they are unknown.
 Limits: TypeAlias = Sequence[float] | Float[ArrayLike, " n"] | None
+#: ``progress(label, done, total)``: called after each fit of a long call (its return value
+#: is ignored); ``done`` runs 1..``total``.
+ProgressCallback: TypeAlias = Callable[[str, int, int], object]
 
 
 def per_joint(name: str, value: Sigma, n: int, allow_none: bool = True

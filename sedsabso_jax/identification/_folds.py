@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 from jaxtyping import ArrayLike, Float, Int
@@ -131,9 +132,10 @@ def fold_labels(times: Float[np.ndarray, " T"], q: Float[np.ndarray, "T n"],
 
 def cross_validation_of(estimator: Estimator, model: TorqueModel, Y: Float[np.ndarray, "T n d"],
                         tau: Float[np.ndarray, "T n"], limits: Float[np.ndarray, " n"] | None,
-                        labels: Int[np.ndarray, " T"], period: float | None) -> CrossValidation:
+                        labels: Int[np.ndarray, " T"], period: float | None, *,
+                        on_fit: Callable[[], object] | None = None) -> CrossValidation:
     """Fit ``estimator`` to all folds but one of the rows ``Y (T, n, d)``, ``tau (T, n)``
-    and predict that one, for each fold of ``labels``."""
+    and predict that one, for each fold of ``labels``; ``on_fit()`` after each fit."""
     folds = int(labels.max()) + 1
     predicted = np.zeros_like(tau)
     scores = []
@@ -142,6 +144,8 @@ def cross_validation_of(estimator: Estimator, model: TorqueModel, Y: Float[np.nd
         fit = estimator.fit(FitProblem(model, Y[~test], tau[~test], limits, warn=False))
         predicted[test] = Y[test] @ fit.x
         scores.append(score_of(validation_metrics(tau[test], predicted[test], limits)))
+        if on_fit is not None:
+            on_fit()
     settings = {**describe(estimator, model, limits), "sigma": getattr(estimator, "sigma", None)}
     return CrossValidation(
         metrics=validation_metrics(tau, predicted, limits), fold_scores=np.asarray(scores),

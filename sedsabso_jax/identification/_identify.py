@@ -205,8 +205,10 @@ def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
             ``"+quadratic"``, ``"+smooth"``, ``"+armature"``, ``"+coupling"``.
         limits: per-joint torque limits (N m): the fit reports its NRMS over them; needed
             by ``sigma="limits"``.
-        transmission, base, smooth_velocity: build a friction string's model
-            (:meth:`~._model.TorqueModel.of`).
+        transmission: builds a friction string's model, with ``base`` and
+            ``smooth_velocity`` (:meth:`~._model.TorqueModel.of`).
+        base: see ``transmission``.
+        smooth_velocity: see ``transmission``.
 
     0.2's form ``identify(robot, q, qd, qdd, tau, method=..., friction=..., sigma=...,
     physical=..., prior=..., prior_weight=..., prior_strength=..., box=..., runs=...,

@@ -13,6 +13,7 @@ from jaxtyping import ArrayLike, Float
 
 from .._output import (
     PathLike,
+    columns_note,
     jsonable,
     markdown_table,
     pyplot,
@@ -51,6 +52,56 @@ def figure_torques(times: Float[ArrayLike, " T"], tau_measured: Float[ArrayLike,
     axes[-1, 0].set_xlabel("time [s]")
     fig.suptitle(title)
     return fig
+
+
+#: The unit of a base parameter, by the letters of its name.
+PARAMETER_UNITS = ("in SI units by name (kg m^2 for inertia XX..ZZ, kg m for first moments "
+                   "MX..MZ, kg for M, N m for Coulomb friction FC, N m s/rad for viscous "
+                   "friction FV, N and N s/m on a prismatic joint, a regrouped `...R` "
+                   "parameter in its first term's unit)")
+#: The unit of a friction model's extra term (:mod:`._model`), by the letters of its name.
+MODEL_UNITS = ("extra terms in N m for a torque offset OFF, N m s^2/rad^2 for velocity-squared "
+               "friction FQ, kg m^2 for a rotor inertia IA, N m s/rad and N m for a coupled "
+               "motor's viscous and Coulomb friction FVM, FCM (IA, FVM, FCM motor-side)")
+#: The note under the first metrics table (:mod:`._metrics` defines the figures).
+METRICS_NOTE = columns_note(
+    ("joint", "one row per joint, `overall` for all joints together"),
+    ("RMS error [N m]", "root mean square over the samples of measured - predicted torque "
+     "(N on a prismatic joint)"),
+    ("relative RMS [%]", "100 RMS error / RMS of the measured torque (overall: 100 norm(e) / "
+     "norm(tau), Frobenius norms)"),
+    ("NRMS range [%]", "100 RMS error / (max - min of the measured torque), overall the "
+     "mean over the joints"),
+    ("NRMS limits [%]", "100 RMS error / (2 torque limit), the error against the whole "
+     "range [-limit, limit], overall the mean over the joints (FloBaRoID's figure), `-` "
+     "without limits"))
+#: The note under a later metrics table.
+SAME_COLUMNS = "Columns as in the fit table above."
+
+
+def metrics_table(metrics: Metrics, joint_names: Sequence[str]) -> str:
+    """Markdown table of ``metrics``: one row per joint and one for the overall figures
+    (the numbers of :meth:`~._metrics.Metrics.table`; columns in :data:`METRICS_NOTE`)."""
+    limits = metrics.nrms_limits_percent_per_joint
+    rows = [[name, f"{metrics.rms[j]:.4g}", f"{metrics.relative_rms_percent[j]:.3f}",
+             f"{metrics.nrms_range_percent[j]:.3f}",
+             "-" if limits is None else f"{limits[j]:.4f}"]
+            for j, name in enumerate(joint_names)]
+    rows.append(["overall", f"{metrics.rms_overall:.4g}",
+                 f"{metrics.relative_rms_percent_overall:.3f}",
+                 f"{metrics.nrms_range_percent_mean:.3f}",
+                 "-" if metrics.nrms_limits_percent is None
+                 else f"{metrics.nrms_limits_percent:.4f}"])
+    return markdown_table(["joint", "RMS error [N m]", "relative RMS [%]", "NRMS range [%]",
+                           "NRMS limits [%]"], rows, align=["left"] + ["right"] * 4)
+
+
+def _cv_error(cv: CrossValidation) -> str:
+    measure = cv.measure
+    what = ("NRMS over the torque limits" if measure == "nrms_limits_percent"
+            else "relative RMS error")
+    return (f"mean +- standard error over the folds of each held-out fold's {what} "
+            f"(`{measure}`)")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -94,39 +145,63 @@ class IdentificationReport:
                    (fit_pred, val_pred), cross_validation, selection, prior_selection)
 
     def text(self) -> str:
-        """The parameters and per-joint metrics as text (markdown tables)."""
+        """The parameters and per-joint metrics as markdown tables, each with a note that
+        defines its columns."""
         ident, robot = self.ident, self.ident.model.robot
+        joints = robot.joint_names
         rows = [[str(i), name, f"{value:.6g}"]
                 for i, (name, value) in enumerate(zip(ident.names, ident.values), 1)]
         lines = [f"{robot.name}: {len(ident.names)} parameters identified by {ident.method} "
                  f"(friction {ident.model.friction}) from {self.data.n_samples} samples of "
                  f"{self.data.source}", "", markdown_table(["#", "parameter", "value"], rows),
-                 "", "fit (identification data):", self.fit.table(robot.joint_names)]
+                 "", columns_note(
+                     ("#", "row number"),
+                     ("parameter", "a base parameter (Eq. 3-4, `R` where others are "
+                      "regrouped onto it) or an extra term of the friction model"),
+                     ("value", f"the identified value {PARAMETER_UNITS}, {MODEL_UNITS}")),
+                 "", "fit (identification data):", "", metrics_table(self.fit, joints), "",
+                 METRICS_NOTE]
         if self.cross_validation is not None:
             cv = self.cross_validation
             folds = (f"{len(cv.fold_scores)} folds of the motion's phase, period "
                      f"{cv.period_s:.4g} s" if cv.period_s is not None
                      else f"{len(cv.fold_scores)} contiguous folds (the motion does not repeat)")
             lines += ["", f"cross-validated on the identification data ({folds}; each fold "
-                          f"predicted by a fit to the others):", cv.metrics.table(
-                              robot.joint_names),
+                          f"predicted by a fit to the others):", "",
+                      metrics_table(cv.metrics, joints), "", SAME_COLUMNS, "",
                       f"CV error ({cv.measure}): {cv.score:.4f} +- {cv.standard_error:.4f} "
                       f"(mean and standard error over the folds)"]
-        measure = "" if self.cross_validation is None else self.cross_validation.measure
         if self.selection is not None:
             lines += ["", "chosen by cross-validation (the simplest whose fold-by-fold excess "
-                          "over the lowest is within one standard error):",
+                          "over the lowest is within one standard error):", "",
                       markdown_table(["method", "sigma", "friction", "parameters",
-                                      f"CV {measure}", ""],
-                                     self.selection.table())]
+                                      "CV error [%]", "choice"], self.selection.table()),
+                      "", columns_note(
+                          ("method", "the estimator (`identify --method`)"),
+                          ("sigma", "what each joint's rows are divided by (`equal`: "
+                           "nothing, `residual`: the RMS of its OLS residual, Gautier's "
+                           "two-step WLS, `limits`: its torque limit)"),
+                          ("friction", "the torque model's terms (`identify --friction`)"),
+                          ("parameters", "the number of parameters the model identifies"),
+                          ("CV error [%]", _cv_error(self.selection.cross_validation)),
+                          ("choice", "`chosen` (the simplest whose fold-by-fold excess over "
+                           "the lowest is within one standard error) or `lowest` (the lowest "
+                           "CV error)"))]
         if self.prior_selection is not None:
             lines += ["", "pull toward the a-priori parameters chosen by cross-validation (the "
-                          "strongest within one standard error of the lowest):",
-                      markdown_table(["prior strength", f"CV {measure}",
-                                      ""], self.prior_selection.table())]
+                          "strongest within one standard error of the lowest):", "",
+                      markdown_table(["prior strength", "CV error [%]", "choice"],
+                                     self.prior_selection.table()),
+                      "", columns_note(
+                          ("prior strength", "weight of the pull toward the a-priori "
+                           "parameters, in multiples of the data term's mean curvature"),
+                          ("CV error [%]", _cv_error(self.prior_selection.cross_validation)),
+                          ("choice", "`chosen` (the strongest pull within one standard error "
+                           "of the lowest) or `lowest` (the lowest CV error)"))]
         if self.validation is not None and self.held_out is not None:
             lines += ["", f"validation ({self.held_out.source}, {self.held_out.n_samples} "
-                          f"samples):", self.validation.table(robot.joint_names)]
+                          f"samples):", "", metrics_table(self.validation, joints), "",
+                      SAME_COLUMNS]
         if self.limits is None:
             lines += ["", "NRMS over torque limits: no limits known for this robot"]
         return "\n".join(lines)

@@ -44,7 +44,7 @@ from ..dynamics._base_parameters import BaseParameters, base_parameters
 from ..dynamics._robot import Robot
 from ..measurements._transmission import TransmissionLike, coupled_motors
 from ._estimators import OLS, WLS, PhysicallyConsistent
-from ._fitting import Estimator, Limits, Sigma, per_joint
+from ._fitting import Estimator, Limits, ProgressCallback, Sigma, per_joint
 from ._folds import DEFAULT_FOLDS as DEFAULT_FOLDS
 from ._folds import REPEAT_CORRELATION as REPEAT_CORRELATION
 from ._folds import TIE_FRACTION as TIE_FRACTION
@@ -82,6 +82,29 @@ def _old_form(what: str, data, positional: tuple, count: int):
     return data
 
 
+class _Fits:
+    """Counts fits for ``progress(label, done, total)`` (None: counts nothing)."""
+
+    def __init__(self, progress: ProgressCallback | None, total: int):
+        self.progress, self.total, self.done = progress, total, 0
+
+    def after(self, label: str) -> Callable[[], None] | None:
+        """The ``on_fit`` of :func:`~._folds.cross_validation_of` for fits labelled so."""
+        if self.progress is None:
+            return None
+        report = self.progress
+
+        def fitted() -> None:
+            self.done += 1
+            report(label, self.done, self.total)
+
+        return fitted
+
+
+def _n_folds(labels) -> int:
+    return int(labels.max()) + 1
+
+
 def _recording(robot, data, folds):
     """Checked ``(times, q, qd, qdd, tau)`` of ``data``, the fold labels and the period."""
     times, q, qd, qdd, tau = data_arrays(robot, data, times=True)
@@ -93,12 +116,14 @@ def cross_validate(robot: Robot, data: Data, estimator: Estimator = OLS(),
                    model: TorqueModel | str | None = None, *old_args: Any,
                    folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS, limits: Limits = None,
                    transmission: TransmissionLike = None, base: BaseParameters | None = None,
-                   smooth_velocity: float = SMOOTH_VELOCITY, **old_keywords: Any
+                   smooth_velocity: float = SMOOTH_VELOCITY,
+                   progress: ProgressCallback | None = None, **old_keywords: Any
                    ) -> CrossValidation:
     """Cross-validate :func:`~._identify.identify` ``(robot, data, estimator, model)`` over
     ``folds`` phase folds of the recording (module docstring), or over given fold labels
     (an integer array, one per sample). ``limits``, ``transmission``, ``base`` and
-    ``smooth_velocity`` as in :func:`~._identify.identify`."""
+    ``smooth_velocity`` as in :func:`~._identify.identify`; ``progress(label, done,
+    total)`` is called after each fold's fit (``total``: the folds)."""
     if old_args or old_keywords:
         data = _old_form("cross_validate", data, (estimator, model, *old_args), 4)
         estimator, model = from_keywords(robot, old_keywords, transmission=transmission,
@@ -109,8 +134,10 @@ def cross_validate(robot: Robot, data: Data, estimator: Estimator = OLS(),
     limits = per_joint("limits", limits, robot.n_joints)
     _check_estimator(estimator).check(model, limits)
     (q, qd, qdd, tau), labels, period = _recording(robot, data, folds)
+    fits = _Fits(progress, _n_folds(labels))
     return cross_validation_of(estimator, model, model.regressor(q, qd, qdd), tau, limits,
-                               labels, period)
+                               labels, period,
+                               on_fit=fits.after(f"{estimator.name}, {model.friction}"))
 
 
 def _check_estimator(estimator):
@@ -174,7 +201,7 @@ def select_model(robot: Robot, data: Data, *old_args: Any,
                  folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS, limits: Limits = None,
                  transmission: TransmissionLike = None, base: BaseParameters | None = None,
                  smooth_velocity: float = SMOOTH_VELOCITY,
-                 progress: Callable[[str, int, int], object] | None = None,
+                 progress: ProgressCallback | None = None,
                  weightings: Iterable[tuple[str, Sigma]] | None = None,
                  **old_keywords: Any) -> Selection:
     """Choose the torque model and the estimator by cross-validation (module docstring).
@@ -183,7 +210,8 @@ def select_model(robot: Robot, data: Data, *old_args: Any,
     limits are skipped without ``limits``) and ``frictions`` (default
     :data:`FRICTION_CANDIDATES`: friction strings, or TorqueModels) are the grid, simplest
     first; a ``transmission`` with a coupled motor adds the ``coupling`` term to every
-    friction string. ``progress(label, done, total)`` is called after each candidate.
+    friction string. ``progress(label, done, total)`` is called after each fit (``total``:
+    candidates x folds).
     0.2's ``weightings`` ((method, sigma) pairs) and keyword settings (``physical``, ...)
     keep working, deprecated."""
     if old_args or old_keywords or weightings is not None:
@@ -210,6 +238,7 @@ def select_model(robot: Robot, data: Data, *old_args: Any,
     if base is None:  # computed once for every candidate
         base = base_parameters(robot)
     tried, options = [], []
+    fits = _Fits(progress, len(frictions) * len(estimators) * _n_folds(labels))
     for friction in frictions:
         if isinstance(friction, str) and coupled and "coupling" not in friction:
             friction = friction + "+coupling"
@@ -221,12 +250,10 @@ def select_model(robot: Robot, data: Data, *old_args: Any,
             estimator.check(model, limits)
             settings = {"method": estimator.name, "sigma": getattr(estimator, "sigma", None),
                         "friction": friction if isinstance(friction, str) else model.friction}
+            on_fit = fits.after(f"{estimator.name}, {model.friction}")
             tried.append((settings, cross_validation_of(estimator, model, Y, tau, limits,
-                                                        labels, period)))
+                                                        labels, period, on_fit=on_fit)))
             options.append((estimator, model))
-            if progress is not None:
-                progress(f"{estimator.name}, {model.friction}", len(tried),
-                         len(frictions) * len(estimators))
     best_settings, best = min(tried, key=lambda c: c[1].score)
     # simplest: fewest parameters, then the earlier (simpler) estimator
     order = sorted(range(len(tried)), key=lambda i: (tried[i][1].n_parameters, i))
@@ -277,7 +304,8 @@ def choose_prior_strength(robot: Robot, data: Data,
                           folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS, limits: Limits = None,
                           transmission: TransmissionLike = None,
                           base: BaseParameters | None = None,
-                          smooth_velocity: float = SMOOTH_VELOCITY, **old_keywords: Any
+                          smooth_velocity: float = SMOOTH_VELOCITY,
+                          progress: ProgressCallback | None = None, **old_keywords: Any
                           ) -> PriorSelection:
     """Choose how strongly a physically consistent fit is pulled toward the a-priori
     parameters (``prior_strength`` of :class:`~._estimators.PhysicallyConsistent`; an
@@ -286,7 +314,8 @@ def choose_prior_strength(robot: Robot, data: Data,
     cross-validated, and the STRONGEST pull whose fold-by-fold excess over the lowest
     error is within one standard error is kept (the one-standard-error rule: the most
     regularised model the data cannot tell from the best). The held-out folds are fitted
-    by nothing, chosen by nothing else."""
+    by nothing, chosen by nothing else. ``progress(label, done, total)`` is called after
+    each fit (``total``: strengths x folds)."""
     strengths = tuple(float(v) for v in strengths)
     if not strengths or any(not (np.isfinite(v) and v >= 0) for v in strengths):
         raise ValueError(f"strengths must be numbers >= 0, at least one, got {strengths}")
@@ -311,10 +340,11 @@ def choose_prior_strength(robot: Robot, data: Data,
     (q, qd, qdd, tau), labels, period = _recording(robot, data, folds)
     Y = model.regressor(q, qd, qdd)
     tried, estimators = [], []
+    fits = _Fits(progress, len(strengths) * _n_folds(labels))
     for v in strengths:
         estimators.append(dataclasses.replace(estimator, prior_strength=v))
         tried.append((v, cross_validation_of(estimators[-1], model, Y, tau, limits, labels,
-                                             period)))
+                                             period, on_fit=fits.after(f"prior strength {v:g}"))))
     best_v, best = min(tried, key=lambda c: c[1].score)
     chosen = max(v for v, cv in tried if not_worse(cv, best))
     return PriorSelection(candidates=tuple(tried), chosen=chosen, best=best_v,

@@ -1,7 +1,7 @@
 """Beetle Swarm Optimisation (BSO): T. Wang, L. Yang, Q. Liu, "Beetle Swarm Optimization
 Algorithm: Theory and Application", arXiv:1808.00206 (2018); the paper's Eq. 10-13.
 
-Per iteration, for every beetle at once (the authors' demo code, ``docs/paper-notes.md``
+Per iteration, for every beetle at once (the authors' demo code, ``docs/explanation/paper-notes.md``
 Sec. 3)::
 
     xl = x + V d/2,  xr = x - V d/2                 # antennae, d = delta / c (Eq. 13)

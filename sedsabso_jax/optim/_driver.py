@@ -273,7 +273,8 @@ def minimise(fitness: FitnessLike, solver: AbstractSolver, lower: Float[ArrayLik
             :class:`~sedsabso_jax.L1Residual` (the paper's Eq. 17, evaluated through
             ``W x``).
         solver: the optimiser and its hyperparameters.
-        lower, upper: the box, 1-D arrays of one length.
+        lower: the box's lower corner, a 1-D array.
+        upper: its upper corner, of the same length.
         key: a JAX PRNG key (``jax.random.key(seed)``); the same key gives the same result.
         iterations: iterations (generations) per run.
         runs: that many independent runs in one call (keys split from ``key``), with a

@@ -1,6 +1,6 @@
 """Linearly decreasing inertia weight PSO (LDWPSO): Y. Shi, R. Eberhart, "A modified
 particle swarm optimizer", IEEE ICEC 1998; "Empirical study of particle swarm
-optimization", CEC 1999; ``docs/paper-notes.md`` Sec. 5::
+optimization", CEC 1999; ``docs/explanation/paper-notes.md`` Sec. 5::
 
     w(t) = w_start - (w_start - w_end) t / (K - 1)
     V = clip(w(t) V + c1 r1 (pbest - x) + c2 r2 (g - x), -Vmax, Vmax)

@@ -3,7 +3,7 @@ shrinking population, the paper's Sec. 4.2 (Eq. 14-16).
 
 Each iteration runs BSO's update (:class:`~._bso.BeetleSwarm`), then ``q`` (``n_trials``)
 simulated-annealing trials on the swarm's global best ``P_g`` (Eq. 14,
-``docs/paper-notes.md`` Sec. 4)::
+``docs/explanation/paper-notes.md`` Sec. 4)::
 
     cand_k = clip(P_g (1 + s r_k), lower, upper)      # r_k ~ U(0, 1) per dimension; s = 1
     guide <- cand_k  if  min(1, exp(-(f(cand_k) - f(guide)) / T)) > U(0, 1)   # Metropolis

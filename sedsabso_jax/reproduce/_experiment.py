@@ -1,6 +1,6 @@
 """The paper's experiment (Section 5) end to end: what ``sedsabso-jax reproduce`` runs.
 
-Steps, on the built-in RS010N (``docs/paper-notes.md`` Sec. 6):
+Steps, on the built-in RS010N (``docs/explanation/paper-notes.md`` Sec. 6):
 
 1. base parameters of the Table 2 robot (21 of 36): the true values;
 2. an excitation trajectory designed by Eq. 9 under the Table 3 limits

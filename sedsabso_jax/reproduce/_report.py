@@ -12,9 +12,18 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .. import paper
-from .._output import PathLike, markdown_table, pyplot, save_figure, to_json, write_text
+from .._output import (
+    PathLike,
+    columns_note,
+    markdown_table,
+    pyplot,
+    save_figure,
+    to_json,
+    write_text,
+)
 from ..dynamics._base_parameters import base_parameters
 from ..dynamics._robot import Robot
+from ..identification._report import PARAMETER_UNITS
 from ._experiment import Experiment
 
 if TYPE_CHECKING:
@@ -24,34 +33,39 @@ if TYPE_CHECKING:
 COLOURS = {"SEDSABSO": "tab:red", "BSO": "tab:blue", "LDWPSO": "tab:green"}
 
 
+def _parameter_columns(name: str, value: str, source: str) -> list[tuple]:
+    """Definitions of the columns a base-parameter table and Table 5 share."""
+    return [("#", "row number"),
+            (name, "the base parameter (Eq. 3-4), `R` appended where others are regrouped "
+             "onto it"),
+            ("expression", "the standard parameters it combines, coefficients in m or m^2"),
+            (value, f"its value {source} {PARAMETER_UNITS}")]
+
+
 def base_parameter_table(robot: Robot, *, paper_columns: bool = False) -> str:
     """Markdown table: name, expression, value from the robot's parameters; with
     ``paper_columns`` (the built-in RS010N) the paper's Table 5 beside it."""
     base = base_parameters(robot)
     values = np.asarray(base.values)
-    head = ["#", "base parameter", "expression", "value (Table 2)" if paper_columns else "value"]
+    value = "value (Table 2)" if paper_columns else "value"
+    head = ["#", "base parameter", "expression", value]
+    defs = _parameter_columns("base parameter", value, "from the paper's Table 2"
+                              if paper_columns else "from the robot's parameters")
     if paper_columns:
         head += ["paper's Table 5 expression", "paper's Table 5 value"]
+        defs += [(head[-2:], "the paper's theoretical expression and value as published, in "
+                  "its notation (inconsistent with Table 2, see sedsabso_jax/paper.py)")]
     rows = []
-    for i, (name, expr, value) in enumerate(zip(base.names, base.expressions, values), 1):
-        row = [str(i), name, expr, f"{value:.4f}"]
+    for i, (name, expr, v) in enumerate(zip(base.names, base.expressions, values), 1):
+        row = [str(i), name, expr, f"{v:.4f}"]
         if paper_columns:
             label, published = paper.TABLE5_THEORETICAL.get(name, ("", None))
             row += [label, "" if published is None else f"{published:g}"]
         rows.append(row)
-    lines = [
+    return "\n".join([
         f"{robot.name}: {base.rank} base parameters of {robot.n_params} "
-        f"({robot.n_joints} joints x 12)",
-        "",
-        markdown_table(head, rows),
-    ]
-    if paper_columns:
-        lines += [
-            "",
-            "Values are computed from the paper's Table 2. The paper's Table 5 column is shown",
-            "as published; it is inconsistent with Table 2 (see sedsabso_jax/paper.py).",
-        ]
-    return "\n".join(lines)
+        f"({robot.n_joints} joints x 12)", "", markdown_table(head, rows), "",
+        columns_note(*defs)])
 
 
 def _g(x, digits: int = 3) -> str:
@@ -72,12 +86,18 @@ def _document(title: str, results: dict, head, rows, note: str) -> str:
                       note, ""])
 
 
+#: The methods of Tables 4 and 5.
+METHODS = ("a swarm (SEDSABSO, BSO, LDWPSO, over its runs) or a baseline (OLS: ordinary least "
+           "squares, LM: Levenberg-Marquardt least squares by optimistix, L1-LP: the exact "
+           "minimum of Eq. 17 by linear programming)")
+
+
 def table4(results: dict) -> str:
     """Markdown: per method the mean and spread of the final fitness (Eq. 17), time per
-    run, batched time, compilation, largest base-parameter error, gap to the L1 optimum;
-    the paper's Table 4 beside it."""
-    head = ["method", "fitness mean", "fitness std", "time/run [s]", "all runs batched [s]",
-            "compile [s]", "max abs error", "gap to L1 optimum",
+    run, batched time, compilation, largest base-parameter error, relative gap to the L1
+    optimum; the paper's Table 4 beside it."""
+    head = ["method", "fitness mean [N m]", "fitness std [N m]", "time/run [s]",
+            "all runs batched [s]", "compile [s]", "max abs error", "relative gap to L1 optimum",
             "paper's fitness mean", "paper's time/run [s]"]
     rows = []
     for name, a in results["algorithms"].items():
@@ -86,14 +106,23 @@ def table4(results: dict) -> str:
                      _g(a["time_mean_s"], 3), _g(a["batched_time_s"], 3),
                      _g(a["compile_s"], 3), _g(a["max_abs_error"], 3),
                      _g(a["gap_to_l1_optimum"], 3), _g(fit), _g(secs, 4)])
-    return _document(
-        "# Table 4: final fitness and time per run", results, head, rows,
-        "Fitness: Eq. 17, sum of |W_b p - tau| over samples and joints [N m]. time/run: one "
-        "run on its own after compilation; batched: all runs in one compiled call. max abs "
-        "error: a run's largest absolute base-parameter error, averaged over runs. The "
-        "paper's columns are as published (MATLAB 9.1, i7-8550U, 10 runs); its data, "
-        "excitation and search box differ from ours, so compare orders of magnitude, not "
-        "digits.")
+    return _document("# Table 4: final fitness and time per run", results, head, rows, columns_note(
+        ("method", METHODS),
+        (("fitness mean [N m]", "fitness std [N m]"), "mean and standard deviation (ddof 0, "
+         "0 for a baseline) over the runs of Eq. 17, the sum over samples and joints of "
+         "|W_b p - tau|, at a run's final p"),
+        ("time/run [s]", "one run on its own after compilation (a baseline: its solve)"),
+        ("all runs batched [s]", "all runs in one compiled call, whose results are shown"),
+        ("compile [s]", "JAX compilation (a swarm's two calls, LM's solver, none for OLS "
+         "and L1-LP)"),
+        ("max abs error", "a run's largest |p_i - p_true_i| over the base parameters, each "
+         "in its own unit (table5.md), averaged over the runs"),
+        ("relative gap to L1 optimum", "(fitness mean - f_L1) / max(f_L1, 1e-9 sum |tau|), "
+         "no unit, with f_L1 the L1-LP row's fitness and sum |tau| the torques' L1 norm (on "
+         "noise-free data f_L1 is rounding noise, and 1e6 means an excess of 1e-3 sum |tau|)"),
+        (("paper's fitness mean", "paper's time/run [s]"), "the paper's Table 4 as published "
+         "(MATLAB 9.1, i7-8550U, 10 runs, other data, excitation and search box: compare "
+         "orders of magnitude, not digits)")))
 
 
 def table5(results: dict) -> str:
@@ -104,7 +133,8 @@ def table5(results: dict) -> str:
     head = ["#", "name", "expression", "true"]
     for m in methods:
         head += [m, f"{m} err"]
-    head += ["paper's theoretical", "paper's SEDSABSO", "paper's BSO", "paper's LDWPSO"]
+    paper_heads = ["paper's SEDSABSO", "paper's BSO", "paper's LDWPSO"]
+    head += ["paper's theoretical", *paper_heads]
     rows = []
     for i, (name, expr, true) in enumerate(zip(bp["names"], bp["expressions"], bp["true"])):
         row = [str(i + 1), name, expr, f"{true:.4f}"]
@@ -115,12 +145,14 @@ def table5(results: dict) -> str:
         ident = paper.TABLE5_IDENTIFIED.get(name, (None, None, None))
         row += [_g(theo, 4), *(_g(v, 4) for v in ident)]
         rows.append(row)
-    return _document(
-        "# Table 5: identified base parameters", results, head, rows,
-        "Values: mean over runs (swarms) or the single estimate (OLS, LM, L1-LP); err: "
-        "absolute error of that value. True values are computed from the paper's Table 2; "
-        "the paper's columns are as published and inconsistent with Table 2 in places "
-        "(sedsabso_jax/paper.py), so they are context, not a target.")
+    defs = _parameter_columns("name", "true", "from the paper's Table 2")
+    return _document("# Table 5: identified base parameters", results, head, rows, columns_note(
+        *defs,
+        (methods, "the method's value, the mean over a swarm's runs: " + METHODS),
+        ([f"{m} err" for m in methods], "|value - true|, in the parameter's unit"),
+        ("paper's theoretical", "the paper's Table 5 theoretical value as published"),
+        (paper_heads, "the paper's Table 5 identified values as published (inconsistent "
+         "with Table 2 in places, see sedsabso_jax/paper.py: context, not a target)")))
 
 
 def figure_population(history_n: dict, phases: dict) -> Figure:

@@ -1,0 +1,304 @@
+"""The command line as its peers': --version, help without a command, help in groups with
+examples, exit statuses (2 bad input, 1 a failure while running), ``base-parameters
+--json``, ``--config FILE`` under the command line, and progress bars only on a terminal
+(the library reports to a callback, quietly by default)."""
+
+from __future__ import annotations
+
+import io
+import json
+import re
+
+import numpy as np
+import pytest
+
+import sedsabso_jax as sj
+from sedsabso_jax import cli
+from sedsabso_jax.cli._config import parse_args
+
+COMMANDS = ("base-parameters", "reproduce", "compare", "identify")
+
+
+def _status(argv) -> int:
+    try:
+        return cli.main(argv)
+    except SystemExit as exit_:
+        return int(exit_.code or 0)
+
+
+@pytest.fixture(scope="module")
+def data_file(tmp_path_factory):
+    """Noise-free RS010N measurements along a random smooth motion (10 s at 40 Hz)."""
+    robot = sj.robots.rs010n()
+    rng = np.random.default_rng(1)
+    traj = sj.FourierTrajectory(rng.uniform(-0.3, 0.3, (3, 3)),
+                                rng.uniform(-0.3, 0.3, (3, 3)), np.zeros(3), wf=0.6)
+    data = sj.simulate_measurements_along(robot, traj, np.arange(400) / 40.0)
+    return str(data.save(tmp_path_factory.mktemp("data") / "run.npz"))
+
+
+# ------------------------------------------------------------------------------ help
+def test_version(capsys):
+    assert _status(["--version"]) == 0
+    assert capsys.readouterr().out == f"sedsabso-jax {sj.__version__}\n"
+
+
+def test_no_command_prints_the_help(capsys):
+    assert cli.main([]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("usage: sedsabso-jax")
+    assert all(c in out for c in COMMANDS) and "exit status:" in out
+
+
+def _help(argv, monkeypatch, capsys, columns=80) -> str:
+    monkeypatch.setenv("COLUMNS", str(columns))
+    assert _status([*argv, "--help"]) == 0
+    return capsys.readouterr().out
+
+
+def _groups(text: str) -> dict[str, list[str]]:
+    """The help's sections (``title:`` lines at the margin) and their lines."""
+    groups: dict[str, list[str]] = {}
+    title = None
+    for line in text.rstrip().splitlines():
+        if re.fullmatch(r"[a-z][a-z ]*:", line):
+            title = line[:-1]
+            groups[title] = []
+        if title is not None:
+            groups[title].append(line)
+    return groups
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_every_command_has_groups_examples_and_exit_statuses(command, monkeypatch, capsys):
+    text = _help([command], monkeypatch, capsys)
+    groups = _groups(text)
+    assert "run" in groups and "outputs" in groups and "options" not in groups, list(groups)
+    examples = [line.strip() for line in groups["examples"] if line.startswith("  ")]
+    assert examples and all(e.startswith(f"sedsabso-jax {command}") for e in examples)
+    assert "exit status: 0 done; 1 a failure while running" in " ".join(text.split())
+
+
+def test_identify_help_fits_a_screen_per_group(monkeypatch, capsys):
+    groups = _groups(_help(["identify"], monkeypatch, capsys, columns=80))
+    assert {"input", "motors", "torque model", "estimator", "validation", "outputs",
+            "run"} <= set(groups)
+    for title, lines in groups.items():
+        assert len(lines) <= 24, f"{title}: {len(lines)} lines at 80 columns"
+        assert max(map(len, lines)) <= 80, title
+
+
+# --------------------------------------------------------------------- exit statuses
+def test_bad_flag_value_is_status_2(capsys):
+    assert _status(["identify", "--robot", "rs010n", "--data", "x.npz", "--folds", "x"]) == 2
+    err = capsys.readouterr().err
+    assert "--folds" in err and err.count("\n") == 1
+
+
+def test_missing_data_file_is_status_2(tmp_path, capsys):
+    missing = str(tmp_path / "none.npz")
+    assert cli.main(["identify", "--robot", "rs010n", "--data", missing]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("sedsabso-jax: error:") and missing in err and err.count("\n") == 1
+
+
+def _failing(error: BaseException):
+    def select_and_identify(*args, **kwargs):
+        raise error
+    return select_and_identify
+
+
+@pytest.mark.parametrize("error, status, message", [
+    (RuntimeError("RESOURCE_EXHAUSTED: Out of memory allocating 9 GB\nBufferAssignment: ..."),
+     1, "sedsabso-jax: error: RESOURCE_EXHAUSTED: Out of memory allocating 9 GB\n"),
+    (MemoryError(), 1, "sedsabso-jax: error: MemoryError\n"),
+    (KeyError("q"), 1, "sedsabso-jax: error: KeyError: 'q' (--debug shows the traceback)\n"),
+    (KeyboardInterrupt(), 130, "sedsabso-jax: interrupted\n"),
+    (ValueError("bad value"), 2, "sedsabso-jax: error: bad value\n"),
+], ids=["runtime", "memory", "unexpected", "interrupt", "value"])
+def test_failures_while_running_are_status_1(error, status, message, data_file, monkeypatch,
+                                              capsys):
+    from sedsabso_jax.identification import _auto
+
+    monkeypatch.setattr(_auto, "select_and_identify", _failing(error))
+    assert cli.main(["identify", "--robot", "rs010n", "--data", data_file]) == status
+    assert capsys.readouterr().err == message
+
+
+def test_solver_failure_is_status_1(data_file, monkeypatch, capsys):
+    cvxpy = pytest.importorskip("cvxpy")
+    from sedsabso_jax.identification import _auto
+
+    monkeypatch.setattr(_auto, "select_and_identify", _failing(cvxpy.error.SolverError("x")))
+    assert cli.main(["identify", "--robot", "rs010n", "--data", data_file]) == 1
+    assert capsys.readouterr().err.count("\n") == 1
+
+
+# --------------------------------------------------------------- base-parameters --json
+def test_base_parameters_json_matches_the_table(tmp_path, capsys):
+    path = tmp_path / "new" / "base.json"
+    assert cli.main(["base-parameters", "--json", str(path)]) == 0
+    out = capsys.readouterr().out
+    rows = [line for line in out.splitlines() if re.match(r"\| \d+ ", line)]
+    doc = json.loads(path.read_text())
+    assert doc["robot"] == "RS010N" and doc["n_joints"] == 3
+    assert doc["n_base_parameters"] == len(rows) == len(doc["base_parameters"]) == 21
+    assert len(doc["standard_parameters"]) == doc["n_standard_parameters"] == 36
+    first = doc["base_parameters"][0]
+    assert first["name"] == "ZZ1R" and first["expression"] in rows[0]
+    assert f"{first['value']:.4f}" in rows[0] and first["paper_table5"]["value"] == 16.41
+    assert np.shape(doc["matrix"]) == (21, 36)
+    assert out.endswith(f"written: {path}\n")
+    assert sorted(p.name for p in path.parent.iterdir()) == ["base.json"]  # no temporary
+
+
+def test_base_parameters_json_to_stdout(capsys):
+    assert cli.main(["base-parameters", "--robot", "kuka_lwr4", "--json", "-"]) == 0
+    doc = json.loads(capsys.readouterr().out)  # only the JSON on stdout
+    assert doc["n_base_parameters"] == 57 and "paper_table5" not in doc["base_parameters"][0]
+
+
+# ----------------------------------------------------------------------------- --config
+FLAGS = ["--robot", "rs010n", "--data", "d.npz", "--method", "OLS", "--physical",
+         "--prior-strength", "1e-3", "--folds", "3", "--cutoff-hz", "5", "--coupling", "2:1=3",
+         "--coupling", "3:2=4", "--json", "r.json"]
+TOML = """robot = "rs010n"
+data = "d.npz"
+method = "OLS"
+physical = true
+prior_strength = 1e-3
+folds = 3
+cutoff-hz = 5
+coupling = ["2:1=3", "3:2=4"]
+json = "r.json"
+"""
+
+
+def _without_config(args) -> dict:
+    return {k: v for k, v in vars(args).items() if k not in ("config", "func")}
+
+
+@pytest.mark.parametrize("name, text", [
+    ("run.toml", TOML),
+    ("run.yaml", TOML.replace(" = ", ": ").replace("true", "yes")),
+])
+def test_config_gives_the_flags_arguments(name, text, tmp_path):
+    if name.endswith(".yaml"):
+        pytest.importorskip("yaml")
+    path = tmp_path / name
+    path.write_text(text)
+    flags = parse_args(cli.build_parser(), ["identify", *FLAGS])
+    config = parse_args(cli.build_parser(), ["identify", "--config", str(path)])
+    assert _without_config(config) == _without_config(flags)
+    assert config.prior_strength == 1e-3 and config.folds == 3 and config.physical is True
+
+
+def test_command_line_wins_over_the_config(tmp_path, capsys):
+    path = tmp_path / "run.toml"
+    path.write_text(TOML)
+    args = parse_args(cli.build_parser(), ["identify", "--folds", "4", "--config", str(path),
+                                           "--coupling", "1:2=5"])
+    assert args.folds == 4 and args.coupling == ["1:2=5"] and args.method == "OLS"
+    assert sorted(capsys.readouterr().err.splitlines()) == [
+        f"sedsabso-jax: note: --coupling from the command line overrides {path}'s value",
+        f"sedsabso-jax: note: --folds from the command line overrides {path}'s value"]
+
+
+@pytest.mark.parametrize("text, message", [
+    ('prior_strenght = 1e-3', "unknown key 'prior_strenght'; did you mean 'prior-strength'?"),
+    ('folds = "many"', "key 'folds' (--folds): expected an integer >= 0, got 'many'"),
+    ('folds = 2.5', "key 'folds' (--folds): expected an integer >= 0, got '2.5'"),
+    ('physical = "yes"', "key 'physical' (--physical): expected true or false, got 'yes'"),
+    ('method = "magic"', "key 'method' (--method): expected one of auto, OLS"),
+    ('robot = ["rs010n"]', "key 'robot' (--robot): expected a string or a number"),
+    ('folds = ', "not a valid .toml file"),
+])
+def test_bad_config_is_one_line_and_status_2(text, message, tmp_path, capsys):
+    path = tmp_path / "bad.toml"
+    path.write_text(f'robot = "rs010n"\n{text}\n' if "robot" not in text else text + "\n")
+    out = tmp_path / "out"
+    status = _status(["identify", "--config", str(path), "--data", "d.npz", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2 and message in err and err.count("\n") == 1, err
+    assert str(path) in err and not out.exists()
+
+
+def test_yaml_config_without_pyyaml_says_what_to_do(tmp_path, monkeypatch, capsys):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "yaml", None)  # import yaml fails
+    path = tmp_path / "run.yml"
+    path.write_text("robot: rs010n\n")
+    assert _status(["identify", "--config", str(path), "--data", "d.npz"]) == 2
+    err = capsys.readouterr().err
+    assert "pip install pyyaml, or write the file as TOML" in err and err.count("\n") == 1
+
+
+# ----------------------------------------------------------------------------- progress
+def test_select_and_identify_reports_each_fit(data_file):
+    calls: list[tuple[str, int, int]] = []
+    data = sj.load_measurements(data_file, n_joints=3)
+    quiet = sj.select_and_identify(sj.robots.rs010n(), data, estimators=sj.OLS(),
+                                   frictions="viscous-coulomb", physical=True,
+                                   prior_strength=1e-3)
+    report = sj.select_and_identify(sj.robots.rs010n(), data, estimators=sj.OLS(),
+                                    frictions="viscous-coulomb", physical=True,
+                                    prior_strength=1e-3,
+                                    progress=lambda *call: calls.append(call))
+    # 5 folds' conic fits, then the fit on all the data
+    assert [c[1:] for c in calls] == [(k, 6) for k in range(1, 7)]
+    assert calls[-1][0] == "fit on all the data"
+    assert report.text() == quiet.text()  # the callback changes nothing
+
+
+def test_model_choice_and_prior_report_each_fit(data_file):
+    calls: list[tuple[str, int, int]] = []
+    data = sj.load_measurements(data_file, n_joints=3)
+    sj.select_and_identify(sj.robots.rs010n(), data, estimators=(sj.OLS(), sj.WLS()),
+                           frictions=("viscous-coulomb", "viscous-coulomb+offset"), folds=3,
+                           physical=True, prior_strength=1e-3,
+                           progress=lambda *call: calls.append(call))
+    # candidates x folds, the chosen one's folds with the pull to the prior, then the fit
+    total = 2 * 2 * 3 + 3 + 1
+    assert [c[1:] for c in calls] == [(k, total) for k in range(1, total + 1)]
+    assert calls[0][0] == "OLS, viscous-coulomb"
+
+
+def test_config_of_reproduce_and_compare(tmp_path):
+    path = tmp_path / "run.toml"
+    path.write_text("design_iterations = 50\nruns = 3\n")
+    args = parse_args(cli.build_parser(), ["reproduce", "--config", str(path)])
+    assert (args.design_iterations, args.runs, args.iterations) == (50, 3, 600)
+    path.write_text("runs = 20\nalgorithms = \"SEDSABSO,CMA_ES\"\n")
+    args = parse_args(cli.build_parser(), ["compare", "--config", str(path)])
+    assert (args.runs, args.algorithms) == (20, "SEDSABSO,CMA_ES")
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_bars_only_on_a_terminal():
+    from sedsabso_jax.cli._common import Progress
+    from sedsabso_jax.cli._compare import CompareProgress
+
+    log, tty = io.StringIO(), _Terminal()
+    for stream in (log, tty):
+        with Progress("identify", stream) as progress:
+            for k in range(1, 4):
+                progress("OLS, viscous-coulomb", k, 3)
+    assert log.getvalue() == ""
+    assert tty.getvalue().startswith("\ridentify:") and "/3 [" in tty.getvalue()
+    with CompareProgress(log) as progress:
+        progress("f1_d5", 0, 2, 0.0)
+        progress("f2_d5", 1, 2, 60.0)
+    assert log.getvalue().splitlines() == ["compare: 0/2      0 s f1_d5",
+                                           "compare: 1/2     60 s f2_d5 ~1 min left"]
+
+
+def test_identify_draws_no_bar_off_a_terminal(data_file, capsys):
+    assert cli.main(["identify", "--robot", "rs010n", "--data", data_file, "--method", "OLS",
+                     "--weights", "equal", "--friction", "viscous-coulomb"]) == 0
+    err = capsys.readouterr().err
+    assert not re.search(r"[\r█|]|fit/s|%", err), err

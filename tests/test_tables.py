@@ -1,0 +1,168 @@
+"""Tables that explain themselves: every table the package writes or prints (``reproduce``'s
+Tables 4 and 5, the base-parameter table, ``identify``'s report, ``compare``'s report.md)
+has a note right under it that defines each column, in backticks as
+:func:`~sedsabso_jax._output.columns_note` writes it, unless the header carries its unit in
+brackets. Each is rendered here from small synthetic inputs; and ``markdown_table`` (now
+tabulate's) keeps its cells and stays a GitHub table."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+import sedsabso_jax as sj
+from sedsabso_jax._output import columns_note, markdown_table
+from sedsabso_jax.compare._report import render
+from sedsabso_jax.identification._folds import CrossValidation
+from sedsabso_jax.identification._report import IdentificationReport
+from sedsabso_jax.identification._validation import PriorSelection, Selection
+from sedsabso_jax.reproduce._report import base_parameter_table, table4, table5
+
+#: Units a header may carry in brackets instead of a definition in the note.
+UNITS = {"s", "%", "N m"}
+SAME = "Columns as in the fit table above."
+
+
+def _tables(text: str) -> list[tuple[list[str], str]]:
+    """``(headers, note)`` of every markdown table in ``text``: the note is the paragraph
+    right after the table (after one blank line)."""
+    lines, out, i = text.splitlines(), [], 0
+    delimiter = re.compile(r"\|(\s*:?-+:?\s*\|)+")
+    while i + 1 < len(lines):
+        if not (lines[i].startswith("|") and delimiter.fullmatch(lines[i + 1].strip())):
+            i += 1
+            continue
+        head = [c.strip().strip("*") for c in lines[i].strip().strip("|").split("|")]
+        i += 2
+        while i < len(lines) and lines[i].startswith("|"):
+            assert lines[i].count("|") == len(head) + 1, lines[i]  # a cell held a "|"
+            i += 1
+        note = []
+        if i + 1 < len(lines) and not lines[i].strip():
+            i += 1
+            while i < len(lines) and lines[i].strip():
+                note.append(lines[i])
+                i += 1
+        out.append((head, " ".join(" ".join(note).split())))
+    return out
+
+
+def undefined(text: str) -> list[str]:
+    """The headers of ``text``'s tables that neither carry a unit nor are defined in their
+    note (or, for a note saying so, in the first table of the same columns)."""
+    tables, missing = _tables(text), []
+    assert tables, "no table"
+    for k, (head, note) in enumerate(tables):
+        if note == SAME:
+            assert any(h == head for h, n in tables[:k] if n != SAME), head
+            continue
+        for h in head:
+            unit = re.fullmatch(r".*\[(.+)\]", h)
+            if not (unit and unit.group(1) in UNITS) and f"`{h}`" not in note:
+                missing.append(h)
+    return missing
+
+
+def test_markdown_table_keeps_cells_and_aligns_numbers():
+    text = markdown_table(["#", "name", "value", "note"],
+                          [["1", "ZZ1R", "0.0000", "a b"], ["12", "FV1", "-1.5e+06", ""]])
+    assert text.splitlines() == [
+        "| #   | name   |    value | note   |",
+        "|:----|:-------|---------:|:-------|",
+        "| 1   | ZZ1R   |   0.0000 | a b    |",
+        "| 12  | FV1    | -1.5e+06 |        |"]
+    assert markdown_table(["a"], [["x"]], align=["right"]).splitlines()[1] == "|----:|"
+
+
+def test_the_checker_finds_a_missing_definition():
+    note = columns_note(("a", "first"), (["b c", "d"], "others"))
+    text = markdown_table(["a", "b c", "d", "t [s]"], [["1", "2", "3", "4"]]) + "\n\n" + note
+    assert undefined(text) == []
+    assert undefined(text.replace("`d`", "d")) == ["d"]
+    assert undefined(text.replace("t [s]", "t [ms]")) == ["t [ms]"]
+
+
+@pytest.mark.parametrize("paper_columns", [True, False])
+def test_base_parameter_table(paper_columns):
+    text = base_parameter_table(sj.robots.rs010n(), paper_columns=paper_columns)
+    assert undefined(text) == []
+    assert "kg m^2" in text and "N m s/rad" in text
+
+
+def _results() -> dict:
+    methods = ("SEDSABSO", "BSO", "LDWPSO", "OLS", "LM", "L1-LP")
+    names, exprs = ["ZZ1R", "FV1"], ["ZZ1 + YY2", "FV1"]
+    return {
+        "settings": {"samples": 20, "noise": 0.0, "scenario": "paper",
+                     "search_box": {"rule": "true +- 10 %"}, "runs": 2, "iterations": 3,
+                     "seed": 0, "dtype": "float64", "device": "cpu: cpu",
+                     "excitation": {"cond": 12.5}},
+        "base_parameters": {"names": names, "expressions": exprs, "true": [1.0, 0.5]},
+        "algorithms": {m: {"fitness_mean": 1.0 + k, "fitness_std": 0.1 * k,
+                           "time_mean_s": 0.01, "batched_time_s": None if k > 2 else 0.02,
+                           "compile_s": 1.0, "max_abs_error": 1e-3,
+                           "gap_to_l1_optimum": 1.27e6 if k < 5 else 0.0,
+                           "params_mean": [1.0 + 1e-3 * k, 0.5]}
+                       for k, m in enumerate(methods)},
+    }
+
+
+def test_reproduce_tables():
+    results = _results()
+    for text in (table4(results), table5(results)):
+        assert undefined(text) == []
+    assert "1e-9 sum |tau|" in table4(results)
+
+
+def test_a_dropped_definition_fails():
+    """The check on a real table: Table 4 without one column's definition fails."""
+    text = table4(_results())
+    assert undefined(text.replace("`max abs error`", "max abs error")) == ["max abs error"]
+
+
+def _compare_docs() -> list[dict]:
+    rng = np.random.default_rng(0)
+    docs = []
+    for name, suite, dim in (("f01_d02", "bbob", 2), ("rs010n-prior", "identification", 21)):
+        algs = {n: {"label": label, "precision": rng.lognormal(k, 1, 6).tolist(),
+                    "run_lengths": [[10.0, None]] * 6, "evaluations": 100}
+                for k, (n, label) in enumerate((("SEDSABSO", "SEDSABSO"), ("BSO", "BSO"),
+                                                ("PSO", "evosax PSO")))}
+        docs.append({"problem": {"name": name, "suite": suite, "dim": dim}, "algorithms": algs})
+    return docs
+
+
+def test_compare_report():
+    text, _ = render(_compare_docs(), {"runs": 6, "budget": "100d", "seed": 0,
+                                      "dtype": "float32", "version": "0"})
+    assert len(_tables(text)) == 3 and undefined(text) == []
+
+
+def _cross_validation(rng, tau, limits, n_parameters) -> CrossValidation:
+    metrics = sj.validation_metrics(tau, tau + rng.normal(0, 0.1, tau.shape), limits)
+    return CrossValidation(metrics, rng.uniform(1, 2, 4), 2.5, np.arange(len(tau)) % 4,
+                           n_parameters, {})
+
+
+@pytest.mark.parametrize("limits", [None, (100.0, 200.0, 50.0)], ids=["no limits", "limits"])
+def test_identify_report(limits):
+    """The report of a noise-free OLS fit, with made-up cross-validation, model and prior
+    selections and held-out data: every table of its text."""
+    rng = np.random.default_rng(1)
+    robot = sj.robots.rs010n()
+    traj = sj.FourierTrajectory(rng.uniform(-0.3, 0.3, (3, 3)), rng.uniform(-0.3, 0.3, (3, 3)),
+                                np.zeros(3), wf=0.6)
+    data = sj.simulate_measurements_along(robot, traj, np.arange(120) / 40.0)
+    ident = sj.identify(robot, data, sj.OLS(), "viscous-coulomb")
+    cvs = [_cross_validation(rng, np.asarray(data.tau), limits, k) for k in (21, 24)]
+    settings = [{"method": "OLS", "sigma": None, "friction": "viscous-coulomb"},
+                {"method": "WLS", "sigma": "residual", "friction": "viscous-coulomb+offset"}]
+    selection = Selection(tuple(zip(settings, cvs)), settings[0], settings[1])
+    prior = PriorSelection(((0.0, cvs[0]), (1e-3, cvs[1])), 1e-3, 0.0)
+    report = IdentificationReport.evaluate(ident, data, data, limits, cross_validation=cvs[0],
+                                           selection=selection, prior_selection=prior)
+    text = report.text()
+    assert len(_tables(text)) == 6 and undefined(text) == []
+    assert "100 RMS error / (2 torque limit)" in " ".join(text.split())
