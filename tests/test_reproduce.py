@@ -17,13 +17,28 @@ FILES = ("table4.md", "table5.md", "fig5_population.png", "fig6_convergence.png"
          "results.json")
 
 
+#: The ``progress(label, done, total)`` calls of the run below.
+PROGRESS: list[tuple[str, int, int]] = []
+
+
 @pytest.fixture(scope="module")
 def reproduced(tmp_path_factory):
     out = tmp_path_factory.mktemp("reproduce")
-    code = cli.main(["reproduce", *SMALL, "--out", str(out / "res"),
-                     "--json", str(out / "copy.json")])
+    run = experiment.run
+    with pytest.MonkeyPatch.context() as patch:  # the CLI's bar is off off a terminal
+        patch.setattr(experiment, "run", lambda settings, progress: run(
+            settings, progress=lambda *call: (PROGRESS.append(call), progress(*call))))
+        code = cli.main(["reproduce", *SMALL, "--out", str(out / "res"),
+                         "--json", str(out / "copy.json")])
     assert code == 0
     return out
+
+
+def test_progress_counts_every_step_to_the_end(reproduced):
+    done = [d for _, d, _ in PROGRESS]
+    total = PROGRESS[0][2]
+    assert all(t == total for _, _, t in PROGRESS)
+    assert done == list(range(total + 1)) and PROGRESS[-1][0] == "done"
 
 
 def test_writes_every_file(reproduced):

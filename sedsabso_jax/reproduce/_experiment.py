@@ -177,10 +177,11 @@ def _progress_noop(label: str, done: int, total: int) -> None:
 
 def run(settings: Settings = Settings(), progress: Callable[[str, int, int], None] | None = None
         ) -> Experiment:
-    """Run the experiment; ``progress(label, done, total)`` is called before each step."""
+    """Run the experiment; ``progress(label, done, total)`` is called before each step
+    (``done`` steps finished) and once at the end (``done == total``)."""
     settings.check()
     progress = progress or _progress_noop
-    total = 4 + len(SWARMS) + len(BASELINES)
+    total = 3 + len(SWARMS) + len(BASELINES)
     step = iter(range(total))
     dtype = jnp.float32 if settings.dtype == "float32" else jnp.float64
     key = jax.random.key(settings.seed)
@@ -231,7 +232,7 @@ def run(settings: Settings = Settings(), progress: Callable[[str, int, int], Non
         entry["gap_to_l1_optimum"] = baselines.gap_to_optimum(
             entry["fitness_mean"], l1_floor, scale=float(np.abs(data.tau).sum()))
 
-    progress("done", next(step), total)
+    progress("done", total, total)
     device = jax.devices()[0]
     results = {
         "schema": SCHEMA,
