@@ -134,6 +134,26 @@ def test_solver_failure_is_status_1(data_file, monkeypatch, capsys):
     assert capsys.readouterr().err.count("\n") == 1
 
 
+def test_each_warning_once(data_file, monkeypatch, capsys):
+    """A warning given twice (a URDF read by the robot and by its limits) is one line;
+    another message is another line."""
+    import warnings
+
+    from sedsabso_jax.identification import _auto
+
+    def warns(*args, **kwargs):  # from two places, as the robot and its limits read a URDF
+        warnings.warn("URDF 'a.urdf': origin twice", stacklevel=1)
+        warnings.warn("URDF 'a.urdf': origin twice", stacklevel=1)
+        warnings.warn("other", stacklevel=1)
+        raise ValueError("stop")
+
+    monkeypatch.setattr(_auto, "select_and_identify", warns)
+    assert cli.main(["identify", "--robot", "rs010n", "--data", data_file]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        "sedsabso-jax: warning: URDF 'a.urdf': origin twice", "sedsabso-jax: warning: other",
+        "sedsabso-jax: error: stop"]
+
+
 # --------------------------------------------------------------- base-parameters --json
 def test_base_parameters_json_matches_the_table(tmp_path, capsys):
     path = tmp_path / "new" / "base.json"

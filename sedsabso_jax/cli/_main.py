@@ -177,9 +177,16 @@ def main(argv: list[str] | None = None) -> int:
         _enable_compilation_cache()
     try:
         with warnings.catch_warnings():
+            warnings.simplefilter("default", UserWarning)
             if not args.debug:
-                warnings.showwarning = _one_line_warning
-            warnings.simplefilter("default", UserWarning)  # each distinct warning once
+                seen: set[tuple[str, type]] = set()
+
+                def show(message, category, *where, **kw):  # each message once, wherever
+                    if (str(message), category) not in seen:  # it comes from (a URDF is
+                        seen.add((str(message), category))     # read more than once)
+                        _one_line_warning(message, category, *where, **kw)
+
+                warnings.showwarning = show
             args.func(args)
     except BrokenPipeError:  # output piped into e.g. `head`: stop quietly (Python docs recipe)
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
