@@ -44,6 +44,7 @@ from ._legacy import prepare as prepare
 from ._legacy import swarm_box as swarm_box
 from ._metrics import nrms_over_limits
 from ._model import SMOOTH_VELOCITY, TorqueModel
+from ._uncertainty import parameter_std, relative_std_percent
 
 #: Joint data: a :class:`~sedsabso_jax.Measurements`, or its arrays ``(q, qd, qdd, tau)``
 #: (``(times, q, qd, qdd, tau)`` where the times are needed), each ``(samples, n)``.
@@ -68,6 +69,11 @@ class Identification:
         result: the optimiser's :class:`~sedsabso_jax.Result` (all runs) of a box search
             (or the baseline's for Levenberg-Marquardt), else ``None``.
         estimator: the estimator object.
+        std: the standard deviation of each value from the residual covariance
+            (:mod:`._uncertainty`: exact for OLS and WLS with independent errors and the
+            model right, a least-squares linearisation for the other estimators; ``inf``
+            where the data do not determine a value), in the value's unit;
+            :attr:`relative_std_percent` is ``100 std / |value|``.
     """
 
     names: tuple[str, ...]
@@ -79,6 +85,12 @@ class Identification:
     full_params: np.ndarray | None = None
     result: Any = None
     estimator: Estimator | None = None
+    std: np.ndarray | None = None
+
+    @property
+    def relative_std_percent(self) -> Float[np.ndarray, " d"] | None:
+        """``100 std / |value|`` [%] (``inf`` for a value of 0), or None without ``std``."""
+        return None if self.std is None else relative_std_percent(self.std, self.values)
 
     def predict(self, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
                 qdd: Float[ArrayLike, "*batch n"]) -> Float[np.ndarray, "*batch n"]:
@@ -102,9 +114,13 @@ class Identification:
         return to_urdf(self.model.robot, self.full_params, comment=comment)
 
     def as_dict(self) -> dict:
-        """Names, values, method, settings and fit statistics, JSON-ready."""
-        out = {"method": self.method, "names": self.names, "values": self.values,
-               "settings": self.settings, "fit": self.fit}
+        """Names, values (and their standard deviations), method, settings and fit
+        statistics, JSON-ready."""
+        out: dict[str, Any] = {"method": self.method, "names": self.names,
+                               "values": self.values, "settings": self.settings,
+                               "fit": self.fit}
+        if self.std is not None:
+            out["std"], out["relative_std_percent"] = self.std, self.relative_std_percent
         if self.full_params is not None:
             out["full_params"] = self.full_params
         return jsonable(out)
@@ -266,4 +282,5 @@ def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
     settings = {**describe(estimator, model, limits), "sigma": out.sigma, **out.extra}
     return Identification(names=model.names, values=x, model=model, method=estimator.name,
                           settings=jsonable(settings), fit=jsonable(fit),
-                          full_params=out.full, result=out.result, estimator=estimator)
+                          full_params=out.full, result=out.result, estimator=estimator,
+                          std=parameter_std(out.W, rw))
