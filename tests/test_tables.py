@@ -164,5 +164,5 @@ def test_identify_report(limits):
     report = IdentificationReport.evaluate(ident, data, data, limits, cross_validation=cvs[0],
                                            selection=selection, prior_selection=prior)
     text = report.text()
-    assert len(_tables(text)) == 6 and undefined(text) == []
+    assert len(_tables(text)) == 7 and undefined(text) == []  # the 7th: extrapolation
     assert "100 RMS error / (2 torque limit)" in " ".join(text.split())

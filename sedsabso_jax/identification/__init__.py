@@ -3,7 +3,8 @@ the estimators ``OLS``, ``WLS``, ``L1``, ``LevenbergMarquardt``, ``BoxSearch``,
 ``PhysicallyConsistent`` and their base ``Estimator``, ``TorqueModel``,
 ``Identification``, ``IdentificationReport``, ``cross_validate``, ``select_model``,
 ``choose_prior_strength``, ``validation_metrics``, ``Metrics``): what writing a new
-estimator needs, the cross-validation's parts and results, and the default candidates.
+estimator needs, the cross-validation's parts and results, the default candidates, and how far
+held-out data extrapolate (``extrapolation``).
 Builds on :mod:`sedsabso_jax.dynamics`, :mod:`sedsabso_jax.optim` and
 :mod:`sedsabso_jax.measurements`."""
 
@@ -11,6 +12,8 @@ from __future__ import annotations
 
 from .. import _deprecation
 from ._auto import estimator_candidates as estimator_candidates
+from ._extrapolation import Extrapolation as Extrapolation
+from ._extrapolation import extrapolation as extrapolation
 from ._fitting import EstimatorFit as EstimatorFit
 from ._fitting import FitProblem as FitProblem
 from ._fitting import weigh as weigh
@@ -31,7 +34,7 @@ __all__ = [
     "FitProblem", "EstimatorFit", "weigh", "CrossValidation", "phase_folds",
     "repeat_period", "DEFAULT_FOLDS", "Selection", "PriorSelection", "FRICTION_CANDIDATES",
     "ESTIMATOR_CANDIDATES", "PRIOR_STRENGTHS", "estimator_candidates", "nrms_over_limits",
-    "FRICTION_TERMS", "figure_torques",
+    "FRICTION_TERMS", "figure_torques", "extrapolation", "Extrapolation",
 ]
 
 #: Names that moved to the package root (0.3), kept with a warning through 0.3.x.

@@ -22,9 +22,11 @@ from .._output import (
     write_text,
 )
 from ..measurements._container import Measurements
+from ._extrapolation import Extrapolation, extrapolation
 from ._fitting import Limits
 from ._identify import Identification
 from ._metrics import Metrics, validation_metrics
+from ._uncertainty import relative_std_percent
 from ._validation import CrossValidation, PriorSelection, Selection
 
 if TYPE_CHECKING:
@@ -127,6 +129,8 @@ class IdentificationReport:
     cross_validation: CrossValidation | None = None
     selection: Selection | None = None
     prior_selection: PriorSelection | None = None
+    #: how far ``held_out`` goes beyond ``data`` (:func:`~._extrapolation.extrapolation`)
+    extrapolation: Extrapolation | None = None
 
     @classmethod
     def evaluate(cls, ident: Identification, data: Measurements,
@@ -134,7 +138,12 @@ class IdentificationReport:
                  cross_validation: CrossValidation | None = None,
                  selection: Selection | None = None,
                  prior_selection: PriorSelection | None = None) -> IdentificationReport:
-        """Predict the torques of ``data`` (and ``held_out``) and compare."""
+        """Predict the torques of ``data`` (and ``held_out``) and compare; with
+        ``held_out``, measure how far it goes beyond ``data``
+        (:func:`~._extrapolation.extrapolation`) and warn when a joint is beyond the
+        thresholds."""
+        beyond = None if held_out is None else extrapolation(
+            data, held_out, joint_names=ident.model.robot.joint_names, warn=True)
         fit_pred = ident.predict(data.q, data.qd, data.qdd)
         val_pred = None if held_out is None else ident.predict(held_out.q, held_out.qd,
                                                               held_out.qdd)
@@ -142,23 +151,34 @@ class IdentificationReport:
                    validation_metrics(data.tau, fit_pred, limits),
                    None if held_out is None else validation_metrics(
                        held_out.tau, val_pred, limits),  # type: ignore[arg-type]
-                   (fit_pred, val_pred), cross_validation, selection, prior_selection)
+                   (fit_pred, val_pred), cross_validation, selection, prior_selection,
+                   beyond)
 
     def text(self) -> str:
         """The parameters and per-joint metrics as markdown tables, each with a note that
         defines its columns."""
         ident, robot = self.ident, self.ident.model.robot
         joints = robot.joint_names
-        rows = [[str(i), name, f"{value:.6g}"]
-                for i, (name, value) in enumerate(zip(ident.names, ident.values), 1)]
+        std = ident.std if ident.std is not None else np.full(len(ident.values), np.nan)
+        relative = relative_std_percent(std, ident.values)
+        rows = [[str(i), name, f"{value:.6g}", f"{sd:.3g}", f"{rel:.3g}"]
+                for i, (name, value, sd, rel)
+                in enumerate(zip(ident.names, ident.values, std, relative), 1)]
         lines = [f"{robot.name}: {len(ident.names)} parameters identified by {ident.method} "
                  f"(friction {ident.model.friction}) from {self.data.n_samples} samples of "
-                 f"{self.data.source}", "", markdown_table(["#", "parameter", "value"], rows),
+                 f"{self.data.source}", "",
+                 markdown_table(["#", "parameter", "value", "std", "relative std [%]"], rows),
                  "", columns_note(
                      ("#", "row number"),
                      ("parameter", "a base parameter (Eq. 3-4, `R` where others are "
                       "regrouped onto it) or an extra term of the friction model"),
-                     ("value", f"the identified value {PARAMETER_UNITS}, {MODEL_UNITS}")),
+                     ("value", f"the identified value {PARAMETER_UNITS}, {MODEL_UNITS}"),
+                     ("std", "its standard deviation in the value's unit, from the residual "
+                      "covariance s^2 (W^T W)^-1 of the weighted rows W (exact for OLS and WLS "
+                      "with independent errors and the model right; a linearisation that "
+                      "ignores the constraints and the prior of a physical fit; `inf`: not "
+                      "determined by the data)"),
+                     ("relative std [%]", "100 std / |value|")),
                  "", "fit (identification data):", "", metrics_table(self.fit, joints), "",
                  METRICS_NOTE]
         if self.cross_validation is not None:
@@ -202,6 +222,13 @@ class IdentificationReport:
             lines += ["", f"validation ({self.held_out.source}, {self.held_out.n_samples} "
                           f"samples):", "", metrics_table(self.validation, joints), "",
                       SAME_COLUMNS]
+        if self.extrapolation is not None:
+            lines += ["", "extrapolation (how far the validation data go beyond the "
+                          "identification data, per joint):", "", self.extrapolation.table(),
+                      "", self.extrapolation.note()]
+            message = self.extrapolation.message()
+            if message is not None:
+                lines += ["", f"warning: {message}"]
         if self.limits is None:
             lines += ["", "NRMS over torque limits: no limits known for this robot"]
         return "\n".join(lines)
@@ -211,7 +238,9 @@ class IdentificationReport:
         with the identification's own."""
         ident = self.ident
         return jsonable({
-            "base_parameters": {"names": ident.names, "values": ident.values},
+            "base_parameters": {"names": ident.names, "values": ident.values,
+                                "std": ident.std,
+                                "relative_std_percent": ident.relative_std_percent},
             "fit": {**self.fit.as_dict(), "residual": ident.fit},
             "validation": None if self.validation is None else self.validation.as_dict(),
             "cross_validation": None if self.cross_validation is None else {
@@ -220,6 +249,8 @@ class IdentificationReport:
                 "prior_strength": None if self.prior_selection is None
                 else self.prior_selection.as_dict()},
             "settings": {**settings, **ident.settings},
+            "extrapolation": None if self.extrapolation is None
+            else self.extrapolation.as_dict(),
         })
 
     def figures(self) -> dict:
