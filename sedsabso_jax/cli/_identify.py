@@ -5,8 +5,11 @@ report is printed and written."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
+from contextlib import AbstractContextManager
+from typing import Any
 
 from ._common import (
     BUILTIN_ROBOTS,
@@ -79,6 +82,17 @@ def _prior_strength(text: str):
     return value
 
 
+def _urdf_source(robot: str) -> AbstractContextManager[Any]:
+    """The URDF file ``--robot`` names (a built-in's shipped file), for ``--urdf-out`` to
+    update; None (a new URDF is written) for the RS010N and the Panda, which have none."""
+    from ..dynamics import _robots as robots
+
+    shipped = {"kuka_lwr4": robots.kuka_lwr4_urdf, "staubli_tx40": robots.staubli_tx40_urdf}
+    if robot in shipped:
+        return shipped[robot]()
+    return contextlib.nullcontext(robot if robot.lower().endswith(".urdf") else None)
+
+
 def run(args: argparse.Namespace) -> None:
     """The subcommand: check the flags, load, build the objects, one call, print, write."""
     from ..dynamics import _robots as robots
@@ -97,6 +111,12 @@ def run(args: argparse.Namespace) -> None:
     if args.urdf_out is not None and not args.physical:
         raise ValueError("--urdf-out needs --physical: a simulator's URDF needs physically "
                          "consistent link parameters")
+    urdf_source = _urdf_source(args.robot)
+    with urdf_source as source:
+        if (args.urdf_out is not None and source is not None
+                and os.path.realpath(args.urdf_out) == os.path.realpath(source)):
+            raise ValueError(f"--urdf-out {args.urdf_out} is the input URDF: write the "
+                             f"identified robot to another file")
     robot = robots.load(args.robot, args.tip)
     load = dict(n_joints=robot.n_joints, cutoff_hz=args.cutoff_hz,
                 filter_torques=args.filter_torques, downsample=args.downsample,
@@ -128,7 +148,9 @@ def run(args: argparse.Namespace) -> None:
                 "validate": None if args.validate is None else os.path.abspath(args.validate),
                 "torque_limits": limits, "loading": {**load, "data_info": data.info},
                 "motor_side": bool(args.motor_side)}
-    written = report.write(settings, args.out, args.json, args.urdf_out)
+    with _urdf_source(args.robot) as source:
+        written = report.write(settings, args.out, args.json, args.urdf_out,
+                               urdf_source=source)
     print(report.text())
     if written:
         print("written: " + ", ".join(written))
@@ -218,7 +240,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     out.add_argument("--out", metavar="DIR", default=None,
                      help="directory for torque plots and identification.json (created)")
     out.add_argument("--urdf-out", metavar="PATH", default=None,
-                     help="write the robot's URDF with the identified link parameters and "
-                     "joint friction (needs --physical)")
+                     help="write the input URDF with the identified inertials and joint "
+                     "friction, all else kept (a new URDF for a DH robot; needs --physical)")
     add_run_options(ip, config="prior_strength = 1e-3")
     ip.set_defaults(func=run)

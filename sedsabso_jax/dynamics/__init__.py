@@ -20,10 +20,12 @@ from ._robot import LINK_PARAMETERS as LINK_PARAMETERS
 from ._robot import N_LINK_PARAMETERS as N_LINK_PARAMETERS
 from ._urdf import URDFError as URDFError
 from ._urdf_writer import to_urdf as to_urdf
+from ._urdf_writer import update_urdf as update_urdf
 
 __all__ = [
     "URDFError", "unchecked_regressor", "chunk_size", "random_states", "joint_limits",
-    "pseudo_inertia", "from_pseudo_inertia", "params_from_com", "to_urdf", "link_poses",
+    "pseudo_inertia", "from_pseudo_inertia", "params_from_com", "to_urdf", "update_urdf",
+    "link_poses",
     "LINK_PARAMETERS", "N_LINK_PARAMETERS",
 ]
 

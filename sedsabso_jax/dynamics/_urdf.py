@@ -34,7 +34,7 @@ class URDFError(ValueError):
     """A URDF that cannot be turned into a serial chain."""
 
 
-def _read(path) -> str:
+def read_checked(path) -> str:
     path = os.fspath(path)
     try:
         with open(path, "rb") as fh:
@@ -108,7 +108,7 @@ def from_urdf(path: PathLike, tip: str | None = None, *,
     branches into several needs it. Joint and link names are the URDF's.
     """
     path = os.fspath(path)
-    model = _parse(_read(path), path)
+    model = _parse(read_checked(path), path)
     links = {link.name: link for link in model.links}
     children = defaultdict(list)
     parent_joint = {}
@@ -229,7 +229,7 @@ def joint_limit_rows(path: PathLike, joint_names: Sequence[str]) -> Float[np.nda
     (unknown) and a missing or zero effort ``nan``.
     """
     path = os.fspath(path)
-    model = _parse(_read(path), path)
+    model = _parse(read_checked(path), path)
     joints = {j.name: j for j in model.joints}
     rows = []
     for name in joint_names:

@@ -8,10 +8,17 @@ the axis and a fixed joint back to the link frame. Fixed joints and off-chain li
 source URDF are not written: their inertia is part of the link they were merged into.
 The written file parses back to the same dynamics (tested with pinocchio and with
 :func:`~sedsabso_jax.robots.from_urdf`).
+
+:func:`update_urdf` instead rewrites the robot's own URDF: only the identified links'
+``<inertial>`` and the movable joints' ``<dynamics>`` change; names, limits, geometry,
+materials, transmissions, simulator elements and comments stay as they were.
 """
 
 from __future__ import annotations
 
+import os
+from collections import defaultdict
+from os import PathLike
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
@@ -46,15 +53,7 @@ def to_urdf(robot: Robot, params: Float[ArrayLike, " p"] | None = None, *,
     """URDF text of ``robot`` with ``params`` (12 per link, default ``robot.params``),
     which must be physically consistent (every link a real body: positive mass, inertia
     satisfying the triangle inequalities); ``comment`` goes into an XML comment."""
-    p = np.asarray(robot.params if params is None else params, dtype=float)
-    if p.shape != (robot.n_params,) or not np.all(np.isfinite(p)):
-        raise ValueError(f"params must be {robot.n_params} finite numbers (12 per link) for "
-                         f"robot {robot.name!r}, got shape {p.shape}")
-    if not is_physically_consistent(p):
-        raise ValueError("a URDF needs physically consistent link parameters (positive mass, "
-                         "positive-definite pseudo-inertia per link): identify with "
-                         "physical=True (--physical)")
-    p = p.reshape(robot.n_joints, N_LINK_PARAMETERS)
+    p = _checked(robot, params)
     lines = ['<?xml version="1.0"?>', f"<robot name={quoteattr(robot.name)}>"]
     if comment:
         lines.append("  <!-- " + comment.replace("--", "- -") + " -->")
@@ -86,3 +85,86 @@ def to_urdf(robot: Robot, params: Float[ArrayLike, " p"] | None = None, *,
         parent = lname
     lines.append("</robot>")
     return "\n".join(lines) + "\n"
+
+
+def _checked(robot: Robot, params: Float[ArrayLike, " p"] | None) -> np.ndarray:
+    """``params`` (default ``robot.params``) as ``(n, 12)``, finite and physically
+    consistent."""
+    p = np.asarray(robot.params if params is None else params, dtype=float)
+    if p.shape != (robot.n_params,) or not np.all(np.isfinite(p)):
+        raise ValueError(f"params must be {robot.n_params} finite numbers (12 per link) for "
+                         f"robot {robot.name!r}, got shape {p.shape}")
+    if not is_physically_consistent(p):
+        raise ValueError("a URDF needs physically consistent link parameters (positive mass, "
+                         "positive-definite pseudo-inertia per link): identify with "
+                         "physical=True (--physical)")
+    return p.reshape(robot.n_joints, N_LINK_PARAMETERS)
+
+
+def update_urdf(source: str | PathLike[str], robot: Robot,
+                params: Float[ArrayLike, " p"] | None = None, *,
+                comment: str | None = None) -> str:
+    """The URDF ``source`` (the file ``robot`` was read from) with ``params`` (12 per link,
+    default ``robot.params``, physically consistent) written into it.
+
+    Each movable joint's child link gets the link's identified ``<inertial>`` (centre of
+    mass as the origin, ``rpy="0 0 0"``, the inertia about the centre of mass); the
+    joint's ``<dynamics>`` gets ``friction`` (Coulomb) and ``damping`` (viscous), made if
+    missing. A link :func:`~sedsabso_jax.robots.from_urdf` merged into an identified one
+    (a fixed child, a tool, a gripper's fingers off the chain) loses its ``<inertial>``:
+    the identified body already holds it, so the file's dynamics (at the off-chain joints'
+    zero) are the fit's. Everything else, comments included, is kept; ``comment`` is added
+    as an XML comment first in ``<robot>``. Raises ValueError if the file's joints are not
+    ``robot``'s."""
+    from lxml import etree
+
+    from ._urdf import read_checked
+
+    p = _checked(robot, params)
+    text = read_checked(source)  # well-formed, no DTD
+    parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False,
+                             remove_blank_text=False, remove_comments=False)
+    root = etree.fromstring(text.encode("utf-8"), parser)
+    joints = {j.get("name"): j for j in root.findall("joint")}
+    links = {link.get("name"): link for link in root.findall("link")}
+    children: defaultdict[str, list] = defaultdict(list)
+    for j in joints.values():
+        parent, child = j.find("parent"), j.find("child")
+        if parent is not None and child is not None:
+            children[parent.get("link")].append(j)
+    where = os.fspath(source)
+    identified = set(robot.joint_names)
+    for i, (jname, lname) in enumerate(zip(robot.joint_names, robot.link_names)):
+        joint = joints.get(jname)
+        child = None if joint is None else joint.find("child")
+        if joint is None or child is None or child.get("link") != lname or lname not in links:
+            raise ValueError(f"URDF {where!r} does not match robot {robot.name!r}: no joint "
+                             f"{jname!r} moving link {lname!r}")
+        link = links[lname]
+        before = link.find("inertial")
+        at, tail = (0, link.text) if before is None else (link.index(before), before.tail)
+        stack = [lname]
+        while stack:  # the links merged into this one: all below it up to the next joint
+            name = stack.pop()
+            for old in links[name].findall("inertial"):
+                links[name].remove(old)
+            stack += [c.find("child").get("link") for c in children[name]
+                      if c.get("name") not in identified]
+        new = etree.fromstring(_inertial(p[i, :10]))
+        indent = (link.text or "\n").rsplit("\n", 1)[-1] if "\n" in (link.text or "") else ""
+        if indent:  # one element a line, as the file has them
+            new.text = "\n" + indent + "  "
+            for k, element in enumerate(new):
+                element.tail = "\n" + indent + ("  " if k < len(new) - 1 else "")
+        new.tail = tail
+        link.insert(at, new)
+        dynamics = joint.find("dynamics")
+        if dynamics is None:
+            dynamics = etree.SubElement(joint, "dynamics")
+        dynamics.set("damping", repr(float(p[i, 11])))
+        dynamics.set("friction", repr(float(p[i, 10])))
+    if comment:
+        note = etree.Comment(" " + comment.replace("--", "- -") + " ")
+        note.tail = root.text
+        root.insert(0, note)
+    return ('<?xml version="1.0"?>\n' + etree.tostring(root, encoding="unicode") + "\n")

@@ -16,6 +16,7 @@ physical=..., ...)`` keeps working through 0.3.x with a ``DeprecationWarning``
 from __future__ import annotations
 
 import dataclasses
+import os
 import time
 import warnings
 from collections.abc import Sequence
@@ -29,7 +30,7 @@ from .._output import jsonable
 from .._version import __version__
 from ..dynamics._base_parameters import BaseParameters
 from ..dynamics._robot import Robot
-from ..dynamics._urdf_writer import to_urdf
+from ..dynamics._urdf_writer import to_urdf, update_urdf
 from ..measurements._container import Measurements
 from ..measurements._transmission import TransmissionLike
 from ..optim._linear import factorize
@@ -97,10 +98,13 @@ class Identification:
         """Predicted torques ``(..., n)`` for states ``(..., n)``."""
         return self.model.predict(self.values, q, qd, qdd)
 
-    def urdf(self) -> str:
+    def urdf(self, source: str | os.PathLike[str] | None = None) -> str:
         """The robot's URDF with the identified link parameters and joint friction (a
-        physical fit only: a simulator needs real bodies). Extra terms a URDF cannot
-        hold (offsets, quadratic friction, armature, ...) are listed in a comment."""
+        physical fit only: a simulator needs real bodies): ``source``, the URDF the robot
+        was read from, with its inertials and joint friction replaced and everything else
+        kept (:func:`~sedsabso_jax.dynamics.update_urdf`), or without one a new URDF of the
+        chain (:func:`~sedsabso_jax.dynamics.to_urdf`). Extra terms a URDF cannot hold
+        (offsets, quadratic friction, armature, ...) are listed in a comment."""
         if self.full_params is None:
             raise ValueError("a URDF needs the full link parameters of a physically "
                              "consistent fit: identify with PhysicallyConsistent(...) "
@@ -111,6 +115,8 @@ class Identification:
         comment = (f"link parameters identified by sedsabso-jax {__version__} "
                    f"({self.method}, physically consistent, friction {self.model.friction})"
                    + (f"; terms URDF cannot hold: {extras}" if extras else ""))
+        if source is not None:
+            return update_urdf(source, self.model.robot, self.full_params, comment=comment)
         return to_urdf(self.model.robot, self.full_params, comment=comment)
 
     def as_dict(self) -> dict:

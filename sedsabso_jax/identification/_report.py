@@ -267,14 +267,15 @@ class IdentificationReport:
                 for name, d, pred, label in sets}
 
     def write(self, settings: dict, out_dir: PathLike | None = None,
-              json_path: PathLike | None = None, urdf_path: PathLike | None = None
-              ) -> list[str]:
+              json_path: PathLike | None = None, urdf_path: PathLike | None = None,
+              urdf_source: PathLike | None = None) -> list[str]:
         """Write the figures and ``identification.json`` into ``out_dir`` (created if
         missing), the JSON also to ``json_path`` and the identified robot's URDF to
-        ``urdf_path`` (their directories created); everything is rendered before the first
-        file is written. Returns the paths written."""
+        ``urdf_path`` (``urdf_source`` updated, if given: :meth:`Identification.urdf`;
+        their directories created); everything is rendered before the first file is
+        written. Returns the paths written."""
         document = self.document(settings)
-        urdf = self.ident.urdf() if urdf_path is not None else None
+        urdf = self.ident.urdf(urdf_source) if urdf_path is not None else None
         figures = self.figures() if out_dir is not None else {}
         written = []
         if out_dir is not None:
