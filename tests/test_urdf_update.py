@@ -58,6 +58,7 @@ def test_kuka_torques_are_the_fits_and_the_rest_is_kept(tmp_path):
 
 
 GRIPPER_URDF = """<?xml version="1.0"?>
+<!-- Copyright and licence of the user's model, before the root -->
 <robot name="arm_with_gripper">
   <!-- a comment the user wrote -->
   <material name="blue"><color rgba="0 0 1 1"/></material>
@@ -138,6 +139,7 @@ def test_gripper_and_geometry_kept_and_lumped_links_massless(tmp_path):
         "l1", "l2", "l3"]
     assert _kept(text) == _kept(GRIPPER_URDF)
     assert "a comment the user wrote" in text and "package://gripper/finger.stl" in text
+    assert "<!-- Copyright and licence of the user's model, before the root -->" in text
     q, qd, qdd = np.random.default_rng(2).standard_normal((3, 15, 3))
     at_zero = np.zeros((15, 2))  # the fingers
     pin = pin_torques(out, *(np.hstack([a, at_zero]) for a in (q, qd, qdd)))

@@ -113,7 +113,8 @@ def update_urdf(source: str | PathLike[str], robot: Robot,
     missing. A link :func:`~sedsabso_jax.robots.from_urdf` merged into an identified one
     (a fixed child, a tool, a gripper's fingers off the chain) loses its ``<inertial>``:
     the identified body already holds it, so the file's dynamics (at the off-chain joints'
-    zero) are the fit's. Everything else, comments included, is kept; ``comment`` is added
+    zero) are the fit's. Everything else, comments included (whitespace inside the replaced
+elements aside), is kept; ``comment`` is added
     as an XML comment first in ``<robot>``. Raises ValueError if the file's joints are not
     ``robot``'s."""
     from lxml import etree
@@ -121,10 +122,11 @@ def update_urdf(source: str | PathLike[str], robot: Robot,
     from ._urdf import read_checked
 
     p = _checked(robot, params)
-    text = read_checked(source)  # well-formed, no DTD
+    read_checked(source)  # well-formed, no DTD or entity
     parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False,
                              remove_blank_text=False, remove_comments=False)
-    root = etree.fromstring(text.encode("utf-8"), parser)
+    with open(source, "rb") as fh:
+        root = etree.fromstring(fh.read(), parser)
     joints = {j.get("name"): j for j in root.findall("joint")}
     links = {link.get("name"): link for link in root.findall("link")}
     children: defaultdict[str, list] = defaultdict(list)
@@ -167,4 +169,6 @@ def update_urdf(source: str | PathLike[str], robot: Robot,
         note = etree.Comment(" " + comment.replace("--", "- -") + " ")
         note.tail = root.text
         root.insert(0, note)
-    return ('<?xml version="1.0"?>\n' + etree.tostring(root, encoding="unicode") + "\n")
+    # the whole document: comments before and after <robot> too
+    return '<?xml version="1.0"?>\n' + etree.tostring(root.getroottree(),
+                                                       encoding="unicode") + "\n"
