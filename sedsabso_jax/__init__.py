@@ -52,6 +52,11 @@ from .identification._metrics import Metrics as Metrics
 from .identification._metrics import validation_metrics as validation_metrics
 from .identification._model import TorqueModel as TorqueModel
 from .identification._report import IdentificationReport as IdentificationReport
+from .identification._splits import GivenFolds as GivenFolds
+from .identification._splits import PhaseFolds as PhaseFolds
+from .identification._splits import RecordingFolds as RecordingFolds
+from .identification._splits import SpeedSplits as SpeedSplits
+from .identification._splits import Validation as Validation
 from .identification._validation import choose_prior_strength as choose_prior_strength
 from .identification._validation import cross_validate as cross_validate
 from .identification._validation import select_model as select_model
@@ -86,7 +91,8 @@ __all__ = [
     "identify", "Identification", "select_and_identify", "IdentificationReport",
     "TorqueModel", "Estimator", "OLS", "WLS", "L1", "LevenbergMarquardt", "BoxSearch",
     "PhysicallyConsistent", "validation_metrics", "Metrics", "cross_validate",
-    "select_model", "choose_prior_strength",
+    "select_model", "choose_prior_strength", "Validation", "PhaseFolds", "SpeedSplits",
+    "RecordingFolds", "GivenFolds",
 ]
 
 #: Old root names, kept with a warning through 0.3.x.

@@ -245,12 +245,14 @@ def test_staubli_tx40_end_to_end_motor_side(real_files, tmp_path):
 
 def test_franka_panda_cross_validated(real_files, tmp_path):
     """The Panda run (irregular time stamps, resampled to 1 kHz; accelerations derived,
-    the filter's edges dropped), one torque model and weighting: cross-validated over the
-    phase of its 13.3 s trajectory. Measured: 0.331 % NRMS over the torque limits."""
+    the filter's edges dropped), one torque model and weighting, unconstrained: validated
+    over the phase of its 13.3 s trajectory. Measured: 0.331 % NRMS over the torque
+    limits."""
     js = tmp_path / "panda.json"
     argv = ["identify", "--robot", "franka_panda", "--data", real_files["panda"],
             "--resample-hz", "1000", "--method", "OLS", "--weights", "equal",
-            "--friction", "viscous-coulomb+offset", "--json", str(js)]
+            "--friction", "viscous-coulomb+offset", "--no-physical", "--validation", "phase",
+            "--json", str(js)]
     assert _status(argv) == 0
     doc = json.loads(js.read_text())
     cv = doc["cross_validation"]
@@ -265,7 +267,7 @@ def test_franka_panda_cross_validated(real_files, tmp_path):
     (["--gear-ratios", "1,1,1", "--coupling", "3:2"], "--coupling: expected MOTOR:JOINT=RATIO"),
     (["--gear-ratios", "1,1,1", "--coupling", "3:2=1", "--coupling", "2:3=1"], "singular"),
     (["--gear-ratios", "1,1,1", "--drive-gains", "1,2"], r"--drive-gains: expected 3"),
-    (["--folds", "0"], "--folds 0 turns cross-validation off"),
+    (["--folds", "0"], "--folds 0 turns validation off"),
 ])
 def test_bad_actuator_arguments(extra, match, tmp_path, capsys):
     robot = sj.robots.rs010n()

@@ -265,8 +265,8 @@ def test_select_and_identify_reports_each_fit(data_file):
                                     frictions="viscous-coulomb", physical=True,
                                     prior_strength=1e-3,
                                     progress=lambda *call: calls.append(call))
-    # 5 folds' conic fits, then the fit on all the data
-    assert [c[1:] for c in calls] == [(k, 6) for k in range(1, 7)]
+    # 3 speed splits' and 5 phase folds' conic fits, then the fit on all the data
+    assert [c[1:] for c in calls] == [(k, 9) for k in range(1, 10)]
     assert calls[-1][0] == "fit on all the data"
     assert report.text() == quiet.text()  # the callback changes nothing
 
@@ -278,10 +278,10 @@ def test_model_choice_and_prior_report_each_fit(data_file):
                            frictions=("viscous-coulomb", "viscous-coulomb+offset"), folds=3,
                            physical=True, prior_strength=1e-3,
                            progress=lambda *call: calls.append(call))
-    # candidates x folds, the chosen one's folds with the pull to the prior, then the fit
-    total = 2 * 2 * 3 + 3 + 1
+    # candidates (with the pull to the prior) x (3 speed splits + 3 phase folds), then the fit
+    total = 2 * 2 * (3 + 3) + 1
     assert [c[1:] for c in calls] == [(k, total) for k in range(1, total + 1)]
-    assert calls[0][0] == "OLS, viscous-coulomb"
+    assert calls[0][0] == "OLS physical, viscous-coulomb"
 
 
 def test_config_of_reproduce_and_compare(tmp_path):

@@ -56,10 +56,12 @@ def test_rs010n_noise_free_recovers_the_true_parameters(rs010n_files, tmp_path, 
 
 def test_kuka_real_data_end_to_end(tmp_path, capsys):
     """A slice of the real KUKA LWR4+ runs: the default method identifies on run 1 and
-    validates on run 2; the JSON has the documented keys, the model chosen by
-    cross-validation on run 1's slice is OLS with a torque offset, and the held-out NRMS
-    over the torque limits is pinned to +-5 % (measured 0.14102 % on these slices; plain
-    OLS with Coulomb + viscous friction gives 0.217 %, outside the band)."""
+    validates on run 2; the JSON has the documented keys, the model chosen by the speed
+    splits on run 1's slice (24 candidates: 12 unconstrained, 12 physically consistent)
+    is the physically consistent OLS fit with offset, quadratic and smooth friction, and
+    the held-out NRMS over the torque limits is pinned to +-5 % (measured 0.15069 % on
+    these slices; plain OLS with Coulomb + viscous friction gives 0.217 %, outside the
+    band)."""
     m1 = sj.load_kuka_lwr4(1).slice(0, 2500)
     m2 = sj.load_kuka_lwr4(2).slice(0, 1500)
     p1, p2 = m1.save(tmp_path / "m1.npz"), m2.save(tmp_path / "m2.npz")
@@ -68,17 +70,19 @@ def test_kuka_real_data_end_to_end(tmp_path, capsys):
     assert code == 0
     doc = json.loads((tmp_path / "r.json").read_text())
     assert set(doc) == {"base_parameters", "fit", "validation", "settings",
-                        "cross_validation", "extrapolation"}
+                        "cross_validation", "check", "extrapolation"}
     assert len(doc["base_parameters"]["names"]) == len(doc["base_parameters"]["values"])
     val = doc["validation"]
     assert len(val["nrms_range_percent"]) == len(val["relative_rms_percent"]) == 7
-    assert val["nrms_limits_percent"] == pytest.approx(0.14102, rel=0.05)
+    assert val["nrms_limits_percent"] == pytest.approx(0.15069, rel=0.05)
     assert doc["settings"]["torque_limits"] == [176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0]
-    assert (doc["settings"]["method"], doc["settings"]["friction"]) == (
-        "OLS", "viscous-coulomb+offset")
+    assert (doc["settings"]["method"], doc["settings"]["friction"],
+            doc["settings"]["physical"]) == ("OLS", "viscous-coulomb+offset+quadratic+smooth",
+                                             True)
     cv = doc["cross_validation"]
-    assert cv["selection"]["chosen"]["friction"] == "viscous-coulomb+offset"
-    assert len(cv["selection"]["candidates"]) == 12 and 0.2 < cv["score"] < 0.4
+    assert cv["validation"]["kind"] == "speed splits" and len(cv["fold_scores"]) == 7
+    assert len(cv["selection"]["candidates"]) == 24 and 0.15 < cv["score"] < 0.3
+    assert doc["check"]["validation"]["kind"] == "phase folds"
 
 
 def _write_bad(tmp_path, case: str, good: str) -> str:
@@ -269,19 +273,20 @@ def test_the_command_is_one_library_call(flags, call, rs010n_files, tmp_path, ca
     cli_settings = {k: doc["settings"][k] for k in ("robot", "data", "validate",
                                                      "torque_limits", "loading", "motor_side")}
     assert _without_times(doc) == _without_times(report.document(cli_settings))
-    assert (report.selection is None) == bool(call)
+    # default: OLS and Gautier's WLS (no limits known), 4 torque models, both kinds
+    assert len(report.selection.candidates) == (1 if call else 16)
 
 
 def test_select_and_identify_checks_its_arguments(rs010n_files):
     robot = sj.robots.rs010n()
     data = sj.load_measurements(rs010n_files[0], n_joints=3)
     for kwargs, match in [(dict(prior_strength=1e-3), "prior_strength needs physical=True"),
-                          (dict(folds=0), "folds=0 turns cross-validation off"),
+                          (dict(folds=0), "folds=0 turns validation off"),
                           (dict(physical=True, estimators=sj.L1()), "physical=True is a "
                            "least-squares fit: use method 'OLS' or 'WLS', not 'L1'"),
                           (dict(physical=True, prior_strength="cv", folds=0,
                                 estimators=sj.OLS(), frictions="offset"),
-                           "prior_strength='cv' chooses by cross-validation")]:
+                           "prior_strength='cv' chooses by validation")]:
         with pytest.raises(ValueError, match=match):
             sj.select_and_identify(robot, data, **kwargs)
 

@@ -63,7 +63,8 @@ def _read(sub: argparse.ArgumentParser, path: str) -> dict[str, Any]:
 def _flags(sub: argparse.ArgumentParser) -> dict[str, argparse.Action]:
     """The subcommand's flags a file may set, by name without dashes."""
     return {o[2:]: a for a in sub._actions for o in a.option_strings
-            if o.startswith("--") and a.dest not in ("help", "config")}
+            if o.startswith("--") and a.dest not in ("help", "config")
+            and not (isinstance(a, argparse.BooleanOptionalAction) and o.startswith("--no-"))}
 
 
 def _one(action: argparse.Action, value: Any) -> Any:

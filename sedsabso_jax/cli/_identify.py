@@ -96,8 +96,11 @@ def _urdf_source(robot: str) -> AbstractContextManager[Any]:
 def run(args: argparse.Namespace) -> None:
     """The subcommand: check the flags, load, build the objects, one call, print, write."""
     from ..dynamics import _robots as robots
+    from ..identification._folds import DEFAULT_FOLDS
+    from ..identification._splits import PhaseFolds, RecordingFolds, SpeedSplits
     from ..dynamics._limits import joint_limits
     from ..identification._auto import estimator_candidates, select_and_identify
+    from ..identification._identify import recordings_of
     from ..identification._validation import FRICTION_CANDIDATES
     from ..measurements._load import load_measurements
 
@@ -106,11 +109,18 @@ def run(args: argparse.Namespace) -> None:
         raise ValueError("--prior-strength needs --physical: the pull to the a-priori "
                          "parameters is part of the physically consistent fit")
     if args.prior_strength == "cv" and args.folds == 0:
-        raise ValueError("--prior-strength cv chooses by cross-validation, which --folds 0 "
+        raise ValueError("--prior-strength cv chooses by validation, which --folds 0 "
                          "turns off: give a number")
-    if args.urdf_out is not None and not args.physical:
-        raise ValueError("--urdf-out needs --physical: a simulator's URDF needs physically "
-                         "consistent link parameters")
+    if args.urdf_out is not None and args.physical is False:
+        raise ValueError("--urdf-out needs physically consistent link parameters, which "
+                         "--no-physical rules out")
+    if args.offset_per_recording and len(args.data) < 2:
+        raise ValueError("--offset-per-recording needs several --data files")
+    if args.validation == "recordings" and len(args.data) < 2:
+        raise ValueError("--validation recordings (leave one recording out) needs several "
+                         "--data files")
+    # --urdf-out: a simulator's URDF needs physically consistent link parameters
+    physical = True if args.urdf_out is not None else args.physical
     urdf_source = _urdf_source(args.robot)
     with urdf_source as source:
         if (args.urdf_out is not None and source is not None
@@ -122,11 +132,12 @@ def run(args: argparse.Namespace) -> None:
                 filter_torques=args.filter_torques, downsample=args.downsample,
                 resample_hz=args.resample_hz, trim_edges=not args.keep_edges)
     transmission = _transmission(args, robot.n_joints)
-    data = load_measurements(args.data, **load)
+    data = [load_measurements(path, **load) for path in args.data]
     held_out = load_measurements(args.validate, **load) if args.validate else None
     if args.motor_side:
-        data = transmission.to_joint_side(data)
+        data = [transmission.to_joint_side(d) for d in data]
         held_out = None if held_out is None else transmission.to_joint_side(held_out)
+    data = recordings_of(robot, data)  # one rate and the robot's joints, or exit 2 now
     limits = joint_limits(args.robot, robot).torque_limits
     if args.weights == "limits" and limits is None:
         raise ValueError(f"--weights limits: no torque limits known for --robot {args.robot} "
@@ -136,17 +147,23 @@ def run(args: argparse.Namespace) -> None:
                                       iterations=args.iterations, seed=args.seed)
     frictions = FRICTION_CANDIDATES if args.friction == AUTO else (args.friction,)
     if args.folds == 0 and len(frictions) * len(estimators) > 1:
-        raise ValueError("--folds 0 turns cross-validation off, so nothing can be chosen by "
-                         "it: give --method, --weights and --friction")
+        raise ValueError("--folds 0 turns validation off, so nothing can be chosen by it: "
+                         "give --method, --weights and --friction (the fit is unconstrained "
+                         "unless --physical)")
+    validation = {"speed": SpeedSplits(), "phase": PhaseFolds(args.folds or DEFAULT_FOLDS),
+                  "recordings": RecordingFolds()}[args.validation]
     with Progress("identify") as progress:  # cross-validation fits, conic solves
         report = select_and_identify(robot, data, held_out=held_out, limits=limits,
                                      transmission=transmission, estimators=estimators,
-                                     frictions=frictions, folds=args.folds,
-                                     physical=args.physical,
-                                     prior_strength=args.prior_strength, progress=progress)
-    settings = {"robot": args.robot, "data": os.path.abspath(args.data),
+                                     frictions=frictions, validation=validation,
+                                     folds=args.folds, physical=physical,
+                                     prior_strength=args.prior_strength,
+                                     offset_per_recording=args.offset_per_recording,
+                                     progress=progress)
+    paths = [os.path.abspath(p) for p in args.data]
+    settings = {"robot": args.robot, "data": paths[0] if len(paths) == 1 else paths,
                 "validate": None if args.validate is None else os.path.abspath(args.validate),
-                "torque_limits": limits, "loading": {**load, "data_info": data.info},
+                "torque_limits": limits, "loading": {**load, "data_info": report.data.info},
                 "motor_side": bool(args.motor_side)}
     with _urdf_source(args.robot) as source:
         written = report.write(settings, args.out, args.json, args.urdf_out,
@@ -177,8 +194,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      help=f"one of {', '.join(BUILTIN_ROBOTS)} or a .urdf file")
     inp.add_argument("--tip", metavar="LINK", default=None,
                      help="URDF tip link, for trees that branch")
-    inp.add_argument("--data", metavar="FILE", required=True,
-                     help="identification data (.npz or .csv)")
+    inp.add_argument("--data", metavar="FILE", required=True, nargs="+",
+                     help="identification data (.npz or .csv); several files (one robot, one "
+                     "sampling rate) are fitted together")
     inp.add_argument("--cutoff-hz", metavar="HZ", type=positive_float, default=None,
                      help="low-pass cutoff where velocities/accelerations are derived or "
                      "torques filtered (default 10 Hz)")
@@ -215,9 +233,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     est.add_argument("--weights", choices=WEIGHTS, default=AUTO,
                      help="row weights per joint: residual (Gautier's two-step WLS), limits "
                      "(1 / torque limit), equal; auto (default): chosen by cross-validation")
-    est.add_argument("--physical", action="store_true",
-                     help="physically consistent parameters (OLS/WLS): positive-definite "
-                     "pseudo-inertia per link, friction >= 0")
+    est.add_argument("--physical", action=argparse.BooleanOptionalAction, default=None,
+                     help="only physically consistent parameters (OLS/WLS): positive-definite "
+                     "pseudo-inertia per link, friction >= 0; --no-physical: only "
+                     "unconstrained ones; neither (default): both, chosen by validation")
     est.add_argument("--prior-strength", type=_prior_strength, default=0.0, metavar="S|cv",
                      help="with --physical: pull toward the robot's a-priori parameters, in "
                      "multiples of the data term's mean curvature (0), or 'cv' to choose it "
@@ -231,9 +250,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     val = ip.add_argument_group("validation")
     val.add_argument("--validate", metavar="FILE", default=None,
                      help="held-out data (.npz or .csv): judges the fit, never chooses it")
+    val.add_argument("--validation", choices=("speed", "phase", "recordings"),
+                     default="speed",
+                     help="what chooses what is auto and predicts the error on new motions: "
+                     "speed (default): for each joint, fit where it moves below 0.7 of its "
+                     "peak speed and predict above 0.8; phase: folds of the motion's phase; "
+                     "recordings: leave one --data file out")
     val.add_argument("--folds", metavar="K", type=non_negative_int, default=5,
-                     help="cross-validation folds over the motion's phase (5); they choose "
-                     "what is auto and report the error on motion not fitted; 0: off")
+                     help="folds over the motion's phase (5), reported beside the validation "
+                     "(interpolation; with several --data files, leave one out instead); 0: "
+                     "no validation at all")
+    val.add_argument("--offset-per-recording", action="store_true",
+                     help="one torque offset per joint and --data file (a sensor zero that "
+                     "moved between them); new motions get their mean")
     out = ip.add_argument_group("outputs", "written atomically: a failed run leaves none")
     out.add_argument("--json", metavar="PATH", default=None,
                      help="write the results JSON to this path (its directory is created)")
@@ -241,6 +270,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      help="directory for torque plots and identification.json (created)")
     out.add_argument("--urdf-out", metavar="PATH", default=None,
                      help="write the input URDF with the identified inertials and joint "
-                     "friction, all else kept (a new URDF for a DH robot; needs --physical)")
+                     "friction, all else kept (a new URDF for a DH robot); only physically "
+                     "consistent candidates are tried")
     add_run_options(ip, config="prior_strength = 1e-3")
     ip.set_defaults(func=run)

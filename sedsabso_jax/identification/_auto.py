@@ -24,9 +24,10 @@ from ..measurements._container import Measurements
 from ..measurements._transmission import TransmissionLike
 from ._estimators import OLS, BoxSearch, PhysicallyConsistent
 from ._fitting import Estimator, Limits, ProgressCallback, Sigma
-from ._identify import Data, identify, torque_model
+from ._identify import Data, identify, recordings_of, torque_model
 from ._model import TorqueModel
 from ._report import IdentificationReport
+from ._splits import GivenFolds, PhaseFolds, RecordingFolds, SpeedSplits, Validation
 from ._validation import (
     DEFAULT_FOLDS,
     ESTIMATOR_CANDIDATES,
@@ -98,99 +99,126 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
                         limits: Limits = None, transmission: TransmissionLike = None,
                         estimators: Estimator | Iterable[Estimator] | None = None,
                         frictions: str | Iterable[str | TorqueModel] | None = None,
-                        folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS, physical: bool = False,
-                        prior_strength: float | str = 0.0, base: BaseParameters | None = None,
+                        validation: Validation | None = None,
+                        folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS,
+                        physical: bool | None = None, prior_strength: float | str = 0.0,
+                        offset_per_recording: bool = False, base: BaseParameters | None = None,
                         progress: ProgressCallback | None = None) -> IdentificationReport:
     """Identify ``robot`` from ``data`` as ``sedsabso-jax identify`` does by default.
 
     1. Model choice: every estimator of ``estimators`` (default
        :data:`~._validation.ESTIMATOR_CANDIDATES`; one :class:`~._fitting.Estimator` or a
-       sequence, e.g. :func:`estimator_candidates`) with every torque model of
-       ``frictions`` (default :data:`~._validation.FRICTION_CANDIDATES`) is
-       cross-validated over ``folds`` folds of the motion's phase, and the simplest
-       within one standard error of the lowest error is kept
-       (:func:`~._validation.select_model`). With one candidate, it is only
-       cross-validated (``folds=0``: not at all).
-    2. ``physical``: every candidate is fitted physically consistent
-       (:class:`~._estimators.PhysicallyConsistent`); ``prior_strength``, a number or
-       ``"cv"`` (chosen from :data:`~._validation.PRIOR_STRENGTHS` by
-       :func:`~._validation.choose_prior_strength`), pulls it toward the robot's
-       a-priori parameters.
-    3. The fit on all of ``data``, judged on it, on its cross-validation and on
-       ``held_out`` (never used to choose or fit).
+       sequence, e.g. :func:`estimator_candidates`), unconstrained and physically
+       consistent (``physical`` None; True: only physically consistent, False: only
+       unconstrained), with every torque model of ``frictions`` (default
+       :data:`~._validation.FRICTION_CANDIDATES`) is scored by ``validation`` (default
+       :class:`~._splits.SpeedSplits`: the error of a model asked to extrapolate in
+       speed, which predicts the error on new, faster motions) and the simplest within one
+       standard error of the lowest is kept (:func:`~._validation.select_model`). Every
+       candidate is also scored by the second validation, the check: ``folds`` folds of the
+       motion's phase (interpolation; a count, or fold labels) for one recording, leave one
+       recording out for several. With one candidate, it is only validated (``folds=0``:
+       not at all).
+    2. ``prior_strength``, a number or ``"cv"`` (chosen from
+       :data:`~._validation.PRIOR_STRENGTHS` by the same validation,
+       :func:`~._validation.choose_prior_strength`), pulls a physically consistent fit
+       toward the robot's a-priori parameters.
+    3. The fit on all of ``data``, judged on it, on both validations and on ``held_out``
+       (never used to choose or fit).
 
-    ``data`` and ``held_out``: :class:`~sedsabso_jax.Measurements` or ``(times, q, qd,
-    qdd, tau)``; ``folds``: a count, or fold labels (one integer per sample); ``limits``:
-    per-joint torque limits (the NRMS measure and the 1/limit weighting; candidates
-    weighting by them are skipped without); ``transmission``, ``base``: as in
-    :func:`~._identify.identify`; ``progress(label, done, total)``: called after each fit
-    (each fold of each candidate's cross-validation, each fold of each prior strength's,
-    then the fit on all of ``data``), ``done`` running 1..``total`` over the whole call
-    (None: quiet). Returns the :class:`~._report.IdentificationReport` the command
-    prints (``text()``) and writes (``write(...)``)."""
-    # a tuple's arrays go to Measurements, whose __post_init__ converts them
-    data = data if isinstance(data, Measurements) else Measurements(*data)  # type: ignore[arg-type]
-    if held_out is not None and not isinstance(held_out, Measurements):
-        held_out = Measurements(*held_out)  # type: ignore[arg-type]
+    ``data``: a :class:`~sedsabso_jax.Measurements`, several (recordings of one rate,
+    fitted together; ``offset_per_recording``: one torque offset per joint and
+    recording), or ``(times, q, qd, qdd, tau)``; ``held_out`` likewise (one recording);
+    ``limits``: per-joint torque limits (the NRMS measure and the 1/limit weighting;
+    candidates weighting by them are skipped without); ``transmission``, ``base``: as in
+    :func:`~._identify.identify`; ``progress(label, done, total)``: called after each
+    fit, ``done`` running 1..``total`` over the whole call (None: quiet). Returns the
+    :class:`~._report.IdentificationReport` the command prints (``text()``) and writes
+    (``write(...)``)."""
+    held_out = None if held_out is None else recordings_of(robot, held_out)
+    if held_out is not None and len(held_out) > 1:
+        raise ValueError("held_out must be one recording")
     estimators = ESTIMATOR_CANDIDATES if estimators is None else (
         (estimators,) if isinstance(estimators, Estimator) else tuple(estimators))
     frictions = FRICTION_CANDIDATES if frictions is None else (
         (frictions,) if isinstance(frictions, (str, TorqueModel)) else tuple(frictions))
-    if prior_strength != 0.0 and not physical:
+    if physical not in (None, True, False):
+        raise ValueError(f"physical must be None (both, chosen by validation), True or False, "
+                         f"got {physical!r}")
+    if prior_strength != 0.0 and physical is not True:
         raise ValueError("prior_strength needs physical=True: the pull to the a-priori "
                          "parameters is part of the physically consistent fit")
     off = np.ndim(folds) == 0 and not folds  # folds: a count, or fold labels
     if prior_strength == "cv" and off:
-        raise ValueError("prior_strength='cv' chooses by cross-validation, which folds=0 "
-                         "turns off: give a number")
-    if physical:
-        for e in estimators:
-            if not isinstance(e, (OLS, PhysicallyConsistent)):
-                raise ValueError(f"physical=True is a least-squares fit: use method 'OLS' or "
-                                 f"'WLS', not {e.name!r}")
-        estimators = tuple(e if isinstance(e, PhysicallyConsistent)
-                           else PhysicallyConsistent(e) for e in estimators)
+        raise ValueError("prior_strength='cv' chooses by validation, which folds=0 turns "
+                         "off: give a number")
+    # None: both kinds, where validation can choose between them
+    estimators = _with_physical(estimators, False if physical is None and off else physical)
+    if physical is True and prior_strength != "cv":  # the candidates fit with the pull
+        estimators = tuple(dataclasses.replace(e, prior_strength=float(prior_strength))  # type: ignore[type-var]
+                           for e in estimators)
     choose = len(frictions) * len(estimators) > 1
     if off and choose:
-        raise ValueError("folds=0 turns cross-validation off, so nothing can be chosen by it: "
+        raise ValueError("folds=0 turns validation off, so nothing can be chosen by it: "
                          "give one estimator and one friction model")
+    recordings = recordings_of(robot, data)
+    several = len(recordings) > 1
+    validation = SpeedSplits() if validation is None else validation
+    check: Validation | None = None if off else RecordingFolds() if several else (
+        GivenFolds(folds) if np.ndim(folds) == 1 else PhaseFolds(int(folds)))  # type: ignore[arg-type]
     base = base_parameters(robot) if base is None else base
-    common: dict[str, Any] = dict(limits=limits, transmission=transmission, base=base)
-    # fits after the model choice: the prior's cross-validation (its cross-validation
-    # replaces the model's, which is then not run), then the fit on all the data
-    n_folds = 0 if off else int(np.max(folds)) + (np.ndim(folds) == 1)
-    refit = physical and (prior_strength == "cv" or bool(prior_strength)) and not off
-    later = 1 + (len(PRIOR_STRENGTHS) * n_folds if prior_strength == "cv" else
-                 n_folds if refit else 0)
+    common: dict[str, Any] = dict(limits=limits, transmission=transmission, base=base,
+                                  offset_per_recording=offset_per_recording)
+    n_val, n_check = (0, 0) if check is None else (len(validation.splits(recordings)),
+                                                    len(check.splits(recordings)))
+    later = 1 + (len(PRIOR_STRENGTHS) * n_val + n_check if prior_strength == "cv" else 0)
     stages = _Stages(progress)
-    selection = cv = None
+    selection = cv = checked = None
     model: TorqueModel | str
-    if choose:
-        selection = select_model(robot, data, estimators=estimators, frictions=frictions,
-                                 folds=folds, progress=stages.stage(later), **common)
-        estimator, model = selection.estimator, selection.model
-        cv = selection.cross_validation
-    else:
+    if off:
         estimator, model = estimators[0], frictions[0]
-        if not isinstance(model, TorqueModel):
-            model = torque_model(robot, model, transmission=transmission, base=base)
-        if not off and not refit:
-            cv = cross_validate(robot, data, estimator, model, folds=folds, limits=limits,
-                                progress=stages.stage(later))
+    else:
+        selection = select_model(robot, recordings, estimators=estimators,
+                                 frictions=frictions, validation=validation, check=check,
+                                 progress=stages.stage(later), **common)
+        estimator, model = selection.estimator, selection.model
+        cv, checked = selection.cross_validation, selection.check
+    if not isinstance(model, TorqueModel):
+        model = torque_model(robot, model, transmission=transmission, base=base,
+                             recordings=len(recordings) if offset_per_recording else 1)
     prior_selection = None
-    if physical and prior_strength == "cv":
-        prior_selection = choose_prior_strength(robot, data, estimator, model,
-                                                strengths=PRIOR_STRENGTHS, folds=folds,
-                                                limits=limits, progress=stages.stage(1))
+    if physical is True and prior_strength == "cv":
+        prior_selection = choose_prior_strength(robot, recordings, estimator, model,
+                                                strengths=PRIOR_STRENGTHS,
+                                                validation=validation, limits=limits,
+                                                progress=stages.stage(n_check + 1))
         estimator, cv = prior_selection.estimator, prior_selection.cross_validation
-    elif physical:
-        estimator = dataclasses.replace(estimator,  # type: ignore[type-var]
-                                        prior_strength=float(prior_strength))
-        if refit:
-            cv = cross_validate(robot, data, estimator, model, folds=folds, limits=limits,
-                                progress=stages.stage(1))
-    ident = identify(robot, data, estimator, model, limits=limits)
+        checked = cross_validate(robot, recordings, estimator, model, validation=check,
+                                 limits=limits, progress=stages.stage(1))
+    ident = identify(robot, recordings, estimator, model, limits=limits)
     if progress is not None:
         progress("fit on all the data", stages.done + 1, stages.done + 1)
-    return IdentificationReport.evaluate(ident, data, held_out, limits, cross_validation=cv,
+    return IdentificationReport.evaluate(ident, recordings, held_out and held_out[0], limits,
+                                         cross_validation=cv, check=checked,
                                          selection=selection, prior_selection=prior_selection)
+
+
+def _with_physical(estimators: tuple[Estimator, ...], physical: bool | None
+                   ) -> tuple[Estimator, ...]:
+    """The candidates for ``physical``: each estimator as given (False), physically
+    consistent (True; OLS and WLS only), or both (None: the physically consistent form
+    of each least-squares estimator after it)."""
+    if physical is False:
+        return estimators
+    out: list[Estimator] = []
+    for e in estimators:
+        if isinstance(e, PhysicallyConsistent):
+            out.append(e)
+        elif isinstance(e, OLS):
+            out += [PhysicallyConsistent(e)] if physical else [e, PhysicallyConsistent(e)]
+        elif physical:
+            raise ValueError(f"physical=True is a least-squares fit: use method 'OLS' or "
+                             f"'WLS', not {e.name!r}")
+        else:
+            out.append(e)
+    return tuple(out)

@@ -88,6 +88,7 @@ class OLS(Estimator):
     sigma: Any = None
     registered_as: ClassVar[tuple[str, ...]] = ("OLS",)
     name: ClassVar[str] = "OLS"
+    normal_equations: ClassVar[bool] = True
 
     def __post_init__(self):
         object.__setattr__(self, "sigma", check_sigma(self.sigma))
@@ -281,6 +282,7 @@ class PhysicallyConsistent(Estimator):
     prior: Any = None
     prior_weight: float = 0.0
     prior_strength: float = 0.0
+    normal_equations: ClassVar[bool] = True
 
     def __post_init__(self):
         if not isinstance(self.least_squares, OLS):

@@ -78,13 +78,19 @@ class FitProblem:
     """The rows an estimator fits, checked: the torque ``model``, its regressor
     ``Y (T, n, d)`` and the torques ``tau (T, n)`` (all samples, or a cross-validation's
     training folds), the per-joint torque ``limits`` (or None), and ``warn``: report a
-    rank-deficient or ill-conditioned regressor (a ``UserWarning``)."""
+    rank-deficient or ill-conditioned regressor (a ``UserWarning``).
+
+    Rows compressed to their normal equations (:mod:`._compressed`) stand for more
+    samples than they are: ``samples`` is how many (default ``Y.shape[0]``), and
+    ``floor (n,)`` each joint's squared residual norm that the rows leave out."""
 
     model: TorqueModel
     Y: np.ndarray
     tau: np.ndarray
     limits: np.ndarray | None = None
     warn: bool = True
+    floor: np.ndarray | None = None
+    samples: int | None = None
 
     def __post_init__(self):
         if not isinstance(self.model, TorqueModel):
@@ -104,6 +110,10 @@ class FitProblem:
         object.__setattr__(self, "Y", Y)
         object.__setattr__(self, "tau", tau)
         object.__setattr__(self, "limits", per_joint("limits", self.limits, n))
+        object.__setattr__(self, "floor", np.zeros(n) if self.floor is None
+                           else np.asarray(self.floor, dtype=float))
+        if self.samples is None:
+            object.__setattr__(self, "samples", Y.shape[0])
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -153,7 +163,8 @@ def weigh(problem: FitProblem, sigma: Sigma, *, default: str = "equal",
     problem's torque limits: the L2 objective is then the squared NRMS over the limits),
     or ``n`` numbers. ``factor``: also factorise the weighted rows (least squares)."""
     Y, tau, n = problem.Y, problem.tau, problem.model.robot.n_joints
-    T, d = Y.shape[0], Y.shape[-1]
+    T = problem.samples if problem.samples is not None else Y.shape[0]
+    d = Y.shape[-1]
     kind = weighting(sigma, default)
     if kind == "limits" and problem.limits is None:
         raise ValueError("sigma='limits' needs limits=(one torque limit per joint)")
@@ -175,10 +186,10 @@ def weigh(problem: FitProblem, sigma: Sigma, *, default: str = "equal",
         assert factor0 is not None  # computed above for "residual"
         r = Y @ factor0.solve() - tau
         d_j = np.count_nonzero(np.any(Y != 0, axis=0), axis=-1)
-        s = np.sqrt(np.sum(r ** 2, axis=0) / np.maximum(T - d_j, 1))
+        s = np.sqrt((np.sum(r ** 2, axis=0) + problem.floor) / np.maximum(T - d_j, 1))
         s = np.where(s > 0, s, max(s.max(), 1e-12))
     assert s is not None
-    row = np.tile(1.0 / s, T)
+    row = np.tile(1.0 / s, Y.shape[0])
     W, b = W0 * row[:, None], tau0 * row
     return WeightedRows(np.asarray(s), W, b, factor0, factorize(W, b) if factor else None)
 
@@ -195,6 +206,10 @@ class Estimator(abc.ABC):
     registered_as: ClassVar[tuple[str, ...]] = ()
     #: What ``sigma=None`` means for this estimator (see :func:`weigh`).
     default_weighting: ClassVar[str] = "equal"
+    #: Whether :meth:`fit` reads the rows only through each joint's normal equations
+    #: (least squares with one weight per joint): validations then fit compressed rows
+    #: (:mod:`._compressed`).
+    normal_equations: ClassVar[bool] = False
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)

@@ -5,13 +5,18 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 from jaxtyping import ArrayLike, Float, Int
 
+from ._compressed import subset_problems
 from ._fitting import Estimator, FitProblem, describe
 from ._metrics import Metrics, validation_metrics
 from ._model import TorqueModel
+
+if TYPE_CHECKING:
+    from ._splits import Splits
 
 #: Folds of :func:`~._validation.cross_validate` unless told otherwise.
 DEFAULT_FOLDS = 5
@@ -58,27 +63,35 @@ def phase_folds(times: Float[ArrayLike, " T"], q: Float[ArrayLike, "T n"],
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class CrossValidation:
-    """Out-of-fold predictions of one identification setting and their errors.
+    """Predictions of one identification setting on samples it was not fitted to, split
+    by a :class:`~._splits.Validation`, and their errors.
 
     Attributes:
-        metrics: :class:`~._metrics.Metrics` of all out-of-fold predictions together.
-        fold_scores: the error of each fold (NRMS over the limits %, else relative RMS %).
-        score: their mean, the cross-validated error; ``standard_error`` its standard
-            error over the folds.
-        period_s: the repeat period the folds follow (None: contiguous blocks).
-        folds: the fold of each sample; ``n_parameters``: the model's parameters.
+        metrics: :class:`~._metrics.Metrics` of all predicted samples together (each
+            split's, stacked: for folds, the out-of-fold predictions).
+        fold_scores: the error of each split (NRMS over the limits %, else relative RMS %).
+        score: their mean, the validated error; ``standard_error`` its standard error
+            over the splits.
+        period_s: the repeat period phase folds follow (None: contiguous folds, or
+            another validation).
+        folds: the fold of each sample where the splits are folds (else None);
+            ``n_parameters``: the model's parameters.
         settings: the estimator's and the model's settings (JSON-ready but for arrays).
-        estimator, model: what was cross-validated.
+        estimator, model: what was validated.
+        validation: the validation's settings (``kind`` and its options);
+            ``split_names`` one per split.
     """
 
     metrics: Metrics
     fold_scores: np.ndarray
     period_s: float | None
-    folds: np.ndarray
+    folds: np.ndarray | None
     n_parameters: int
     settings: dict
     estimator: Estimator | None = None
     model: TorqueModel | None = None
+    validation: dict = dataclasses.field(default_factory=lambda: {"kind": "phase folds"})
+    split_names: tuple[str, ...] = ()
 
     @property
     def score(self) -> float:
@@ -98,6 +111,7 @@ class CrossValidation:
         return {"measure": self.measure, "score": self.score,
                 "standard_error": self.standard_error, "fold_scores": self.fold_scores,
                 "folds": len(self.fold_scores), "period_s": self.period_s,
+                "validation": self.validation, "splits": list(self.split_names),
                 "n_parameters": self.n_parameters, "settings": self.settings,
                 "metrics": self.metrics.as_dict()}
 
@@ -109,48 +123,49 @@ def score_of(metrics: Metrics) -> float:
     return metrics.relative_rms_percent_overall
 
 
-def fold_labels(times: Float[np.ndarray, " T"], q: Float[np.ndarray, "T n"],
-                folds: int | Int[ArrayLike, " T"]) -> tuple[Int[np.ndarray, " T"], float | None]:
-    """The fold of each sample and the period: phase folds for an int ``folds``, or
-    ``folds`` itself as given labels ``0..K-1`` (one per sample)."""
-    if np.ndim(folds) == 1:
-        labels, period = np.asarray(folds), None
-        if labels.shape != times.shape or labels.dtype.kind not in "iu" or labels.min() < 0:
-            raise ValueError(f"fold labels must be integers >= 0, one per sample "
-                             f"({times.shape[0]}), got shape {labels.shape}")
-        folds = int(labels.max()) + 1
-        if folds < 2:
-            raise ValueError("fold labels must name at least 2 folds")
-    else:  # folds is an int here (np.ndim 0), which mypy cannot tell
-        labels, period = phase_folds(times, q, folds)  # type: ignore[arg-type]
-    for k in range(folds):  # type: ignore[arg-type]
-        if not np.any(labels == k):
-            raise ValueError(f"fold {k + 1} of {folds} is empty: the recording is too short "
-                             f"for {folds} folds")
-    return labels, period
+class SplitRows:
+    """The rows ``Y (T, n, d)``, ``tau (T, n)`` of one torque model and the fit problem
+    of each split's training samples: compressed to their normal equations
+    (:mod:`._compressed`, formed once for every least-squares estimator that validates
+    this model) or, for the others, the rows themselves."""
+
+    def __init__(self, model: TorqueModel, Y: Float[np.ndarray, "T n d"],
+                 tau: Float[np.ndarray, "T n"], limits: Float[np.ndarray, " n"] | None,
+                 splits: Splits):
+        self.model, self.Y, self.tau, self.limits, self.splits = model, Y, tau, limits, splits
+        self._compressed: list[FitProblem] | None = None
+
+    def problems(self, estimator: Estimator) -> list[FitProblem]:
+        if estimator.normal_equations:
+            if self._compressed is None:
+                self._compressed = subset_problems(self.model, self.Y, self.tau, self.limits,
+                                                   list(self.splits.train))
+            return self._compressed
+        return [FitProblem(self.model, self.Y[k], self.tau[k], self.limits, warn=False)
+                for k in self.splits.train]
 
 
-def cross_validation_of(estimator: Estimator, model: TorqueModel, Y: Float[np.ndarray, "T n d"],
-                        tau: Float[np.ndarray, "T n"], limits: Float[np.ndarray, " n"] | None,
-                        labels: Int[np.ndarray, " T"], period: float | None, *,
+def cross_validation_of(estimator: Estimator, rows: SplitRows, validation: dict, *,
                         on_fit: Callable[[], object] | None = None) -> CrossValidation:
-    """Fit ``estimator`` to all folds but one of the rows ``Y (T, n, d)``, ``tau (T, n)``
-    and predict that one, for each fold of ``labels``; ``on_fit()`` after each fit."""
-    folds = int(labels.max()) + 1
-    predicted = np.zeros_like(tau)
-    scores = []
-    for k in range(folds):
-        test = labels == k
-        fit = estimator.fit(FitProblem(model, Y[~test], tau[~test], limits, warn=False))
-        predicted[test] = Y[test] @ fit.x
-        scores.append(score_of(validation_metrics(tau[test], predicted[test], limits)))
+    """Fit ``estimator`` to each split's training samples of ``rows`` and predict its
+    test samples; ``validation`` the settings of the validation that made the splits;
+    ``on_fit()`` after each fit."""
+    splits, Y, tau, limits = rows.splits, rows.Y, rows.tau, rows.limits
+    measured, predicted, scores = [], [], []
+    for problem, test in zip(rows.problems(estimator), splits.test):
+        fit = estimator.fit(problem)
+        measured.append(tau[test])
+        predicted.append(Y[test] @ fit.x)
+        scores.append(score_of(validation_metrics(measured[-1], predicted[-1], limits)))
         if on_fit is not None:
             on_fit()
-    settings = {**describe(estimator, model, limits), "sigma": getattr(estimator, "sigma", None)}
+    settings = {**describe(estimator, rows.model, limits),
+                "sigma": getattr(estimator, "sigma", None)}
     return CrossValidation(
-        metrics=validation_metrics(tau, predicted, limits), fold_scores=np.asarray(scores),
-        period_s=period, folds=labels, n_parameters=model.dim, settings=settings,
-        estimator=estimator, model=model)
+        metrics=validation_metrics(np.concatenate(measured), np.concatenate(predicted), limits),
+        fold_scores=np.asarray(scores), period_s=splits.period_s, folds=splits.labels,
+        n_parameters=rows.model.dim, settings=settings, estimator=estimator, model=rows.model,
+        validation=validation, split_names=splits.names)
 
 
 def not_worse(cv: CrossValidation, best: CrossValidation) -> bool:

@@ -47,9 +47,12 @@ from ._metrics import nrms_over_limits
 from ._model import SMOOTH_VELOCITY, TorqueModel
 from ._uncertainty import parameter_std, relative_std_percent
 
-#: Joint data: a :class:`~sedsabso_jax.Measurements`, or its arrays ``(q, qd, qdd, tau)``
-#: (``(times, q, qd, qdd, tau)`` where the times are needed), each ``(samples, n)``.
-Data: TypeAlias = Measurements | Sequence[ArrayLike]
+#: Joint data: a :class:`~sedsabso_jax.Measurements`, several of them (recordings fitted
+#: together), or its arrays ``(q, qd, qdd, tau)`` (``(times, q, qd, qdd, tau)`` where the
+#: times are needed), each ``(samples, n)``.
+Data: TypeAlias = Measurements | Sequence[Measurements] | Sequence[ArrayLike]
+#: Recordings fitted together may differ in rate by this fraction.
+RATE_TOLERANCE = 0.01
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -185,12 +188,70 @@ def data_arrays(robot: Robot, data: Data, *, times: bool = False) -> list[np.nda
     return [t, *checked]
 
 
+def is_several(data: object) -> bool:
+    """Whether ``data`` is a sequence of :class:`~sedsabso_jax.Measurements`."""
+    return (isinstance(data, (list, tuple)) and len(data) > 0
+            and all(isinstance(d, Measurements) for d in data))
+
+
+def recordings_of(robot: Robot, data: Data) -> list[Measurements]:
+    """``data`` as a list of recordings of ``robot``: one :class:`~sedsabso_jax.Measurements`,
+    several, or the arrays ``(times, q, qd, qdd, tau)``. Several must have the robot's
+    joints and one sampling rate (within :data:`RATE_TOLERANCE`); a ValueError names the
+    recording that does not."""
+    if not is_several(data):
+        if not isinstance(data, Measurements):
+            times, q, qd, qdd, tau = data_arrays(robot, data, times=True)
+            data = Measurements(times, q, qd, qdd, tau)
+        data_arrays(robot, data)
+        return [data]
+    found = list(data)  # type: ignore[arg-type]
+    rates = []
+    for k, d in enumerate(found):
+        if d.n_joints != robot.n_joints:
+            raise ValueError(f"recording {k + 1} ({d.source}) has {d.n_joints} joints, robot "
+                             f"{robot.name!r} has {robot.n_joints}")
+        rates.append(d.rate)
+    if max(rates) > (1 + RATE_TOLERANCE) * min(rates):
+        listed = ", ".join(f"{d.source}: {r:.4g} Hz" for d, r in zip(found, rates))
+        raise ValueError(f"the recordings have different sampling rates ({listed}): load "
+                         f"them at one rate (load_measurements(..., resample_hz=...))")
+    return found
+
+
+def stacked(recordings: Sequence[Measurements]) -> tuple[np.ndarray, ...]:
+    """``(q, qd, qdd, tau, recording index)`` of ``recordings``, concatenated."""
+    arrays = [np.concatenate([getattr(d, f) for d in recordings])
+              for f in ("q", "qd", "qdd", "tau")]
+    index = np.concatenate([np.full(d.n_samples, k) for k, d in enumerate(recordings)])
+    return (*arrays, index)
+
+
+def joined(recordings: Sequence[Measurements]) -> Measurements:
+    """One :class:`~sedsabso_jax.Measurements` of ``recordings`` one after the other (each
+    later one's times shifted to start a sample step after the previous one's end), for
+    reports and figures; one recording is returned as it is."""
+    if len(recordings) == 1:
+        return recordings[0]
+    times, start = [], 0.0
+    for d in recordings:
+        t = d.times - d.times[0] + start
+        times.append(t)
+        start = float(t[-1]) + 1.0 / d.rate
+    q, qd, qdd, tau, _ = stacked(recordings)
+    return Measurements(np.concatenate(times), q, qd, qdd, tau,
+                        source=" + ".join(d.source for d in recordings),
+                        info={"recordings": [{"source": d.source, "samples": d.n_samples,
+                                              **d.info} for d in recordings]})
+
+
 def torque_model(robot: Robot, model: TorqueModel | str | None, *,
                  transmission: TransmissionLike = None, base: BaseParameters | None = None,
-                 smooth_velocity: float = SMOOTH_VELOCITY) -> TorqueModel:
+                 smooth_velocity: float = SMOOTH_VELOCITY, recordings: int = 1) -> TorqueModel:
     """``model`` (a :class:`~._model.TorqueModel` of ``robot``, or friction terms as a
-    string, None for ``"viscous-coulomb"``) as a TorqueModel; ``transmission``, ``base``
-    and ``smooth_velocity`` build a string's model (a TorqueModel has its own)."""
+    string, None for ``"viscous-coulomb"``) as a TorqueModel; ``transmission``, ``base``,
+    ``smooth_velocity`` and ``recordings`` (one offset per recording, the offset term
+    added) build a string's model (a TorqueModel has its own)."""
     if not isinstance(robot, Robot):
         raise TypeError(f"robot must be a sedsabso_jax.Robot, got {type(robot).__name__}")
     if isinstance(model, TorqueModel):
@@ -204,21 +265,25 @@ def torque_model(robot: Robot, model: TorqueModel | str | None, *,
             raise ValueError(f"{', '.join(given)}: part of the TorqueModel given as model; "
                              f"build it with TorqueModel.of(robot, ..., {given[0]}=...)")
         return model
-    return TorqueModel.of(robot, "viscous-coulomb" if model is None else model,
-                          transmission=transmission, smooth_velocity=smooth_velocity,
-                          base=base)
+    friction = "viscous-coulomb" if model is None else model
+    if recordings > 1 and isinstance(friction, str) and "offset" not in friction:
+        friction += "+offset"
+    return TorqueModel.of(robot, friction, transmission=transmission,
+                          smooth_velocity=smooth_velocity, base=base, recordings=recordings)
 
 
 def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
              model: TorqueModel | str | None = None, *old_args: Any, limits: Limits = None,
              transmission: TransmissionLike = None, base: BaseParameters | None = None,
-             smooth_velocity: float = SMOOTH_VELOCITY, **old_keywords: Any) -> Identification:
+             smooth_velocity: float = SMOOTH_VELOCITY, offset_per_recording: bool = False,
+             **old_keywords: Any) -> Identification:
     """Identify the base parameters (plus extra friction terms) of ``robot`` from
     ``data``.
 
     Args:
-        data: a :class:`~sedsabso_jax.Measurements` or ``(q, qd, qdd, tau)``, each
-            ``(samples, n)``.
+        data: a :class:`~sedsabso_jax.Measurements`, several (recordings fitted together:
+            one robot, one sampling rate), or ``(q, qd, qdd, tau)``, each ``(samples,
+            n)``.
         estimator: one of :mod:`._estimators`: ``OLS()`` (default), ``WLS(sigma)``,
             ``L1()``, ``LevenbergMarquardt()``, ``BoxSearch(solver, ...)``,
             ``PhysicallyConsistent(OLS() or WLS(...), prior_strength=...)``.
@@ -231,6 +296,10 @@ def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
             ``smooth_velocity`` (:meth:`~._model.TorqueModel.of`).
         base: see ``transmission``.
         smooth_velocity: see ``transmission``.
+        offset_per_recording: with several recordings and a friction string, one torque
+            offset per joint and recording (``OFFj.r``; the ``offset`` term is added): a
+            sensor zero that moved between them. New motions are predicted with their
+            mean. A TorqueModel carries its own (``TorqueModel.of(..., recordings=R)``).
 
     0.2's form ``identify(robot, q, qd, qdd, tau, method=..., friction=..., sigma=...,
     physical=..., prior=..., prior_weight=..., prior_strength=..., box=..., runs=...,
@@ -263,15 +332,27 @@ def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
     if not isinstance(estimator, Estimator):
         raise TypeError(f"estimator must be an Estimator (OLS(), WLS(...), L1(), "
                         f"BoxSearch(...), ...), got {estimator!r}")
+    index = None
+    if is_several(data):
+        recordings = recordings_of(robot, data)
+        q, qd, qdd, tau, index = stacked(recordings)
+    else:
+        q, qd, qdd, tau = data_arrays(robot, data)
+    count = 1 if index is None else int(index.max()) + 1
+    if offset_per_recording and count < 2:
+        raise ValueError("offset_per_recording needs several recordings")
     model = torque_model(robot, model, transmission=transmission, base=base,
-                         smooth_velocity=smooth_velocity)
+                         smooth_velocity=smooth_velocity,
+                         recordings=count if offset_per_recording else 1)
+    if model.recordings > 1 and model.recordings != count:
+        raise ValueError(f"the torque model has one offset per recording for "
+                         f"{model.recordings} recordings; the data hold {count}")
     limits = per_joint("limits", limits, robot.n_joints)
     estimator.check(model, limits)
     if model.regrouped:
         warnings.warn(regrouped_message(model), stacklevel=_deprecation.caller_stacklevel())
-    q, qd, qdd, tau = data_arrays(robot, data)
     t0 = time.perf_counter()
-    Y = model.regressor(q, qd, qdd)  # (T, n, d)
+    Y = model.regressor(q, qd, qdd, index if model.recordings > 1 else None)  # (T, n, d)
     out = estimator.fit(FitProblem(model, Y, tau, limits))
     run_s = time.perf_counter() - t0
 

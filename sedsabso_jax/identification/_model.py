@@ -11,6 +11,11 @@ Model (``friction``, terms joined by ``+``)::
                                                 with several joints, u_m = K_m . qd
     sign(qd_j) -> tanh(qd_j / smooth_velocity)  "smooth": Coulomb term without the jump
 
+With ``recordings = R > 1`` (several recordings fitted together) the offset is one per
+joint and recording, ``OFF1.1 .. OFF1.R, OFF2.1 ..``: a torque sensor's zero that moved
+between the recordings. Rows of recording ``r`` carry 1 in the ``OFFj.r`` column; rows of
+no recording (new motions) carry ``1/R`` in each, their mean.
+
 ``K`` is the transmission (motor angles ``theta = K q``, :class:`~sedsabso_jax.measurements.
 transmission.Transmission`); without one, ``K = 1`` and the armature of joint ``j`` is the
 joint-side column ``qdd_j``. With a diagonal ``K`` an ``IA`` value is the motor-side rotor
@@ -29,7 +34,7 @@ import functools
 import numbers
 
 import numpy as np
-from jaxtyping import ArrayLike, Float
+from jaxtyping import ArrayLike, Float, Int
 
 from ..dynamics._base_parameters import (
     RANK_TOLERANCE,
@@ -61,8 +66,15 @@ class TorqueModel:
     friction: str = "viscous-coulomb"
     smooth_velocity: float = SMOOTH_VELOCITY
     transmission: np.ndarray | None = None
+    recordings: int = 1
 
     def __post_init__(self):
+        if not isinstance(self.recordings, (int, np.integer)) or isinstance(
+                self.recordings, bool) or self.recordings < 1:
+            raise ValueError(f"recordings must be an integer >= 1, got {self.recordings!r}")
+        if self.recordings > 1 and "offset" not in self.terms:
+            raise ValueError("one torque offset per recording needs the 'offset' term in the "
+                             "friction model (e.g. 'viscous-coulomb+offset')")
         if self.transmission is not None:
             K = np.asarray(self.transmission, dtype=float)
             n = self.robot.n_joints
@@ -78,13 +90,14 @@ class TorqueModel:
     def of(cls, robot: Robot, friction: str = "viscous-coulomb", *,
            transmission: TransmissionLike = None,
            smooth_velocity: float = SMOOTH_VELOCITY,
-           base: BaseParameters | None = None) -> TorqueModel:
+           base: BaseParameters | None = None, recordings: int = 1) -> TorqueModel:
         """The model of ``robot`` with the ``friction`` terms (``"viscous-coulomb"`` plus
         any of ``"+offset"``, ``"+quadratic"``, ``"+smooth"``, ``"+armature"``,
         ``"+coupling"``, in any order), ``transmission`` (a
         :class:`~sedsabso_jax.measurements._transmission.Transmission` or its matrix ``K``)
         for the armature and coupling terms, the smooth Coulomb term's velocity scale, and
-        ``base``, a precomputed ``base_parameters(robot)`` (computed when None)."""
+        ``base``, a precomputed ``base_parameters(robot)`` (computed when None), and
+        ``recordings``: one torque offset per joint and recording (module docstring)."""
         if not isinstance(robot, Robot):
             raise TypeError(f"robot must be a sedsabso_jax.Robot, got {type(robot).__name__}")
         friction = canonical_friction(friction)
@@ -96,7 +109,7 @@ class TorqueModel:
         elif not isinstance(base, BaseParameters) or base.robot.n_params != robot.n_params:
             raise ValueError("base must be base_parameters(robot) of this robot")
         return cls(base, friction, float(smooth_velocity),
-                   getattr(transmission, "matrix", transmission))
+                   getattr(transmission, "matrix", transmission), recordings)
 
     @property
     def robot(self) -> Robot:
@@ -111,6 +124,8 @@ class TorqueModel:
             out["regrouped"] = list(self.regrouped)
         if "smooth" in self.terms:
             out["smooth_velocity"] = float(self.smooth_velocity)
+        if self.recordings > 1:
+            out["offset_per_recording"] = self.recordings
         return out
 
     @property
@@ -137,17 +152,40 @@ class TorqueModel:
         n = self.robot.n_joints
         names = []
         for k in self.extras:
+            if k == "OFF" and self.recordings > 1:
+                names += [f"OFF{j + 1}.{r + 1}" for j in range(n) for r in range(self.recordings)]
+                continue
             motors = self._coupled if k in ("FVM", "FCM") else range(n)
             names += [f"{k}{m + 1}" for m in motors]
         return names
 
-    def _extra_columns(self, qd, qdd) -> np.ndarray:
+    def _offsets(self, batch: tuple[int, ...], recording) -> np.ndarray:
+        """The offset columns ``(..., n, n R)``: joint ``j``'s row has its recording's
+        indicator in columns ``j R .. j R + R - 1`` (``1/R`` each without a recording)."""
+        n, R = self.robot.n_joints, self.recordings
+        if recording is None:
+            share = np.full(batch + (R,), 1.0 / R)
+        else:
+            index = np.asarray(recording)
+            if index.shape != batch or index.dtype.kind not in "iu" or (
+                    index.size and (index.min() < 0 or index.max() >= R)):
+                raise ValueError(f"recording must hold one integer in [0, {R}) per sample "
+                                 f"{batch}, got shape {index.shape}")
+            share = (index[..., None] == np.arange(R)).astype(float)
+        E = np.zeros(batch + (n, n, R))
+        E[..., np.arange(n), np.arange(n), :] = share[..., None, :]
+        return E.reshape(batch + (n, n * R))
+
+    def _extra_columns(self, qd, qdd, recording=None) -> np.ndarray:
         """All extra columns, ``(..., n, len(_extra_names()))``."""
         n = self.robot.n_joints
         batch = qd.shape[:-1]
         K = self._K
         cols = []
         for k in self.extras:
+            if k == "OFF" and self.recordings > 1:
+                cols.append(self._offsets(batch, recording))
+                continue
             if k in ("OFF", "FQ"):
                 E = np.zeros(batch + (n, n))
                 E[..., np.arange(n), np.arange(n)] = 1.0 if k == "OFF" else qd * np.abs(qd)
@@ -171,7 +209,8 @@ class TorqueModel:
         # the sample count base_parameters uses: the regressor is compiled for it already
         q, qd, qdd = random_states(robot, max(50, -(-4 * robot.n_params // robot.n_joints)),
                                    seed=1)
-        Y = self._full_regressor(q, qd, qdd)
+        recording = np.random.default_rng(1).integers(0, self.recordings, q.shape[0])
+        Y = self._full_regressor(q, qd, qdd, recording if self.recordings > 1 else None)
         W = Y.reshape(-1, Y.shape[-1])
         W = W / np.where(np.linalg.norm(W, axis=0) > 0, np.linalg.norm(W, axis=0), 1.0)
         d = np.abs(np.diag(np.linalg.qr(W, mode="r")))
@@ -201,7 +240,7 @@ class TorqueModel:
     def dim(self) -> int:
         return len(self.names)
 
-    def _full_regressor(self, q, qd, qdd) -> np.ndarray:
+    def _full_regressor(self, q, qd, qdd, recording=None) -> np.ndarray:
         q, qd, qdd = (np.asarray(a, dtype=float) for a in (q, qd, qdd))
         Y = np.asarray(self.base.regressor(q, qd, qdd))
         n = self.robot.n_joints
@@ -210,23 +249,28 @@ class TorqueModel:
         if "smooth" in self.terms:
             Y = Y.copy()
             Y[..., np.arange(n), self._fc_columns()] = np.tanh(qd / self.smooth_velocity)
-        return np.concatenate([Y, self._extra_columns(qd, qdd)], -1)
+        return np.concatenate([Y, self._extra_columns(qd, qdd, recording)], -1)
 
     def regressor(self, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
-                  qdd: Float[ArrayLike, "*batch n"]) -> Float[np.ndarray, "*batch n d"]:
-        """``(..., n, dim)``: the base columns, then the identifiable extra columns."""
-        Y = self._full_regressor(q, qd, qdd)
+                  qdd: Float[ArrayLike, "*batch n"],
+                  recording: Int[ArrayLike, "*batch"] | None = None
+                  ) -> Float[np.ndarray, "*batch n d"]:
+        """``(..., n, dim)``: the base columns, then the identifiable extra columns;
+        ``recording``: the recording of each sample, for one offset per recording (None:
+        new motions, the offsets' mean)."""
+        Y = self._full_regressor(q, qd, qdd, recording)
         keep = np.r_[np.arange(self.base.rank), self.base.rank + self._kept]
         return Y[..., keep] if len(keep) < Y.shape[-1] else Y
 
     def predict(self, values: Float[ArrayLike, " d"], q: Float[ArrayLike, "*batch n"],
-                qd: Float[ArrayLike, "*batch n"], qdd: Float[ArrayLike, "*batch n"]
+                qd: Float[ArrayLike, "*batch n"], qdd: Float[ArrayLike, "*batch n"],
+                recording: Int[ArrayLike, "*batch"] | None = None
                 ) -> Float[np.ndarray, "*batch n"]:
-        """Torques ``regressor(q, qd, qdd) @ values``, ``(..., n)``."""
+        """Torques ``regressor(q, qd, qdd, recording) @ values``, ``(..., n)``."""
         values = np.asarray(values, dtype=float)
         if values.shape != (self.dim,):
             raise ValueError(f"values must have shape ({self.dim},), got {values.shape}")
-        return self.regressor(q, qd, qdd) @ values
+        return self.regressor(q, qd, qdd, recording) @ values
 
     def _fc_columns(self) -> np.ndarray:
         """Base column of each joint's Coulomb coefficient (friction never regroups)."""

@@ -24,7 +24,7 @@ from .._output import (
 from ..measurements._container import Measurements
 from ._extrapolation import Extrapolation, extrapolation
 from ._fitting import Limits
-from ._identify import Identification
+from ._identify import Identification, joined, stacked
 from ._metrics import Metrics, validation_metrics
 from ._uncertainty import relative_std_percent
 from ._validation import CrossValidation, PriorSelection, Selection
@@ -102,8 +102,18 @@ def _cv_error(cv: CrossValidation) -> str:
     measure = cv.measure
     what = ("NRMS over the torque limits" if measure == "nrms_limits_percent"
             else "relative RMS error")
-    return (f"mean +- standard error over the folds of each held-out fold's {what} "
-            f"(`{measure}`)")
+    return (f"mean +- standard error over the splits of each split's predicted samples' "
+            f"{what} (`{measure}`)")
+
+
+def _described(cv: CrossValidation) -> str:
+    """What a validation did, for the report."""
+    text = cv.validation.get("description", cv.validation["kind"])
+    if cv.period_s is not None:
+        text += f"; period {cv.period_s:.4g} s"
+    elif cv.validation["kind"] == "phase folds":
+        text += "; contiguous folds, the motion does not repeat"
+    return text
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -131,20 +141,27 @@ class IdentificationReport:
     prior_selection: PriorSelection | None = None
     #: how far ``held_out`` goes beyond ``data`` (:func:`~._extrapolation.extrapolation`)
     extrapolation: Extrapolation | None = None
+    #: the chosen setting's second validation (phase folds, or leave one recording out)
+    check: CrossValidation | None = None
 
     @classmethod
-    def evaluate(cls, ident: Identification, data: Measurements,
+    def evaluate(cls, ident: Identification, data: Measurements | Sequence[Measurements],
                  held_out: Measurements | None = None, limits: Limits = None, *,
                  cross_validation: CrossValidation | None = None,
+                 check: CrossValidation | None = None,
                  selection: Selection | None = None,
                  prior_selection: PriorSelection | None = None) -> IdentificationReport:
-        """Predict the torques of ``data`` (and ``held_out``) and compare; with
-        ``held_out``, measure how far it goes beyond ``data``
+        """Predict the torques of ``data`` (one recording or several; their own torque
+        offsets where the model has one per recording) and of ``held_out``, and compare;
+        with ``held_out``, measure how far it goes beyond ``data``
         (:func:`~._extrapolation.extrapolation`) and warn when a joint is beyond the
         thresholds."""
+        recordings = [data] if isinstance(data, Measurements) else list(data)
+        data = joined(recordings)
         beyond = None if held_out is None else extrapolation(
             data, held_out, joint_names=ident.model.robot.joint_names, warn=True)
-        fit_pred = ident.predict(data.q, data.qd, data.qdd)
+        index = stacked(recordings)[-1] if ident.model.recordings > 1 else None
+        fit_pred = ident.model.predict(ident.values, data.q, data.qd, data.qdd, index)
         val_pred = None if held_out is None else ident.predict(held_out.q, held_out.qd,
                                                               held_out.qdd)
         return cls(ident, data, held_out, limits,
@@ -152,7 +169,7 @@ class IdentificationReport:
                    None if held_out is None else validation_metrics(
                        held_out.tau, val_pred, limits),  # type: ignore[arg-type]
                    (fit_pred, val_pred), cross_validation, selection, prior_selection,
-                   beyond)
+                   beyond, check)
 
     def text(self) -> str:
         """The parameters and per-joint metrics as markdown tables, each with a note that
@@ -183,30 +200,41 @@ class IdentificationReport:
                  METRICS_NOTE]
         if self.cross_validation is not None:
             cv = self.cross_validation
-            folds = (f"{len(cv.fold_scores)} folds of the motion's phase, period "
-                     f"{cv.period_s:.4g} s" if cv.period_s is not None
-                     else f"{len(cv.fold_scores)} contiguous folds (the motion does not repeat)")
-            lines += ["", f"cross-validated on the identification data ({folds}; each fold "
-                          f"predicted by a fit to the others):", "",
+            lines += ["", f"predicted error on new motions ({_described(cv)}):", "",
                       metrics_table(cv.metrics, joints), "", SAME_COLUMNS, "",
-                      f"CV error ({cv.measure}): {cv.score:.4f} +- {cv.standard_error:.4f} "
-                      f"(mean and standard error over the folds)"]
+                      f"validated error ({cv.measure}): {cv.score:.4f} +- "
+                      f"{cv.standard_error:.4f} (mean and standard error over "
+                      f"{len(cv.fold_scores)} splits): the error to expect on new motions"]
+        if self.check is not None:
+            ck = self.check
+            lines += ["", f"second validation ({_described(ck)}): {ck.score:.4f} +- "
+                          f"{ck.standard_error:.4f} ({ck.measure}; the error to expect on "
+                          f"motions like the fitted one, not chosen by)"]
         if self.selection is not None:
-            lines += ["", "chosen by cross-validation (the simplest whose fold-by-fold excess "
-                          "over the lowest is within one standard error):", "",
-                      markdown_table(["method", "sigma", "friction", "parameters",
-                                      "CV error [%]", "choice"], self.selection.table()),
+            check = [self.check.validation["kind"] + " [%]"] if self.selection.checks \
+                and self.check is not None else []
+            kind = self.selection.cross_validation.validation["kind"]
+            lines += ["", f"chosen by {kind} (the simplest whose split-by-split excess over "
+                          f"the lowest is within one standard error):", "",
+                      markdown_table(["method", "sigma", "physical", "friction", "parameters",
+                                      f"{kind} [%]", *check, "choice"],
+                                     self.selection.table()),
                       "", columns_note(
                           ("method", "the estimator (`identify --method`)"),
                           ("sigma", "what each joint's rows are divided by (`equal`: "
                            "nothing, `residual`: the RMS of its OLS residual, Gautier's "
                            "two-step WLS, `limits`: its torque limit)"),
+                          ("physical", "`yes`: physically consistent parameters "
+                           "(`identify --physical`), friction coefficients >= 0"),
                           ("friction", "the torque model's terms (`identify --friction`)"),
                           ("parameters", "the number of parameters the model identifies"),
-                          ("CV error [%]", _cv_error(self.selection.cross_validation)),
-                          ("choice", "`chosen` (the simplest whose fold-by-fold excess over "
-                           "the lowest is within one standard error) or `lowest` (the lowest "
-                           "CV error)"))]
+                          (f"{kind} [%]", _cv_error(self.selection.cross_validation)),
+                          *([(check[0], "the same error by the second validation (not "
+                              "chosen by)")] if check else []),
+                          ("choice", "`chosen` (the simplest, fewest parameters then "
+                           "physically consistent, whose split-by-split excess over the "
+                           "lowest is within one standard error) or `lowest` (the lowest "
+                           "error)"))]
         if self.prior_selection is not None:
             lines += ["", "pull toward the a-priori parameters chosen by cross-validation (the "
                           "strongest within one standard error of the lowest):", "",
@@ -248,6 +276,7 @@ class IdentificationReport:
                 "selection": None if self.selection is None else self.selection.as_dict(),
                 "prior_strength": None if self.prior_selection is None
                 else self.prior_selection.as_dict()},
+            "check": None if self.check is None else self.check.as_dict(),
             "settings": {**settings, **ident.settings},
             "extrapolation": None if self.extrapolation is None
             else self.extrapolation.as_dict(),

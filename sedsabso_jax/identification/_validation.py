@@ -49,12 +49,13 @@ from ._folds import DEFAULT_FOLDS as DEFAULT_FOLDS
 from ._folds import REPEAT_CORRELATION as REPEAT_CORRELATION
 from ._folds import TIE_FRACTION as TIE_FRACTION
 from ._folds import CrossValidation as CrossValidation
-from ._folds import cross_validation_of, fold_labels, not_worse
+from ._folds import SplitRows, cross_validation_of, not_worse
 from ._folds import phase_folds as phase_folds
 from ._folds import repeat_period as repeat_period
-from ._identify import Data, data_arrays, torque_model
+from ._identify import Data, recordings_of, stacked, torque_model
 from ._legacy import estimator_from, from_keywords
 from ._model import SMOOTH_VELOCITY, TorqueModel
+from ._splits import GivenFolds, PhaseFolds, Splits, Validation
 
 #: The candidate torque models of :func:`select_model`, simplest first.
 FRICTION_CANDIDATES = ("viscous-coulomb", "viscous-coulomb+offset",
@@ -101,43 +102,88 @@ class _Fits:
         return fitted
 
 
-def _n_folds(labels) -> int:
-    return int(labels.max()) + 1
+def validation_of(validation: Validation | None, folds: int | Int[ArrayLike, " T"] | None
+                  ) -> Validation:
+    """The :class:`~._splits.Validation` of the arguments ``validation`` and ``folds`` (a
+    count of phase folds, or fold labels), which are alternatives."""
+    if validation is not None:
+        if folds is not None:
+            raise ValueError("give folds or validation, not both (folds=K is "
+                             "validation=PhaseFolds(K))")
+        if not isinstance(validation, Validation):
+            raise TypeError(f"validation must be a Validation (PhaseFolds(), SpeedSplits(), "
+                            f"RecordingFolds(), GivenFolds(labels)), got {validation!r}")
+        return validation
+    if folds is None:
+        return PhaseFolds()
+    if np.ndim(folds) == 1:
+        return GivenFolds(folds)  # type: ignore[arg-type]
+    return PhaseFolds(folds)  # type: ignore[arg-type]
 
 
-def _recording(robot, data, folds):
-    """Checked ``(times, q, qd, qdd, tau)`` of ``data``, the fold labels and the period."""
-    times, q, qd, qdd, tau = data_arrays(robot, data, times=True)
-    labels, period = fold_labels(times, q, folds)
-    return (q, qd, qdd, tau), labels, period
+@dataclasses.dataclass(frozen=True, eq=False)
+class Prepared:
+    """The recordings of ``data``, checked and stacked, and a validation's splits."""
+
+    recordings: list
+    arrays: tuple[np.ndarray, ...]  # q, qd, qdd, tau, recording index
+    splits: Splits
+    validation: Validation
+
+    @classmethod
+    def of(cls, robot: Robot, data: Data, validation: Validation) -> Prepared:
+        recordings = recordings_of(robot, data)
+        return cls(recordings, stacked(recordings), validation.splits(recordings), validation)
+
+    def rows(self, model: TorqueModel, limits: np.ndarray | None) -> SplitRows:
+        q, qd, qdd, tau, index = self.arrays
+        Y = model.regressor(q, qd, qdd, index if model.recordings > 1 else None)
+        return SplitRows(model, Y, tau, limits, self.splits)
+
+    def validate(self, estimator: Estimator, rows: SplitRows,
+                 on_fit: Callable[[], None] | None = None) -> CrossValidation:
+        return cross_validation_of(estimator, rows, {**self.validation.settings(),
+                                                     "description": self.validation.describe()},
+                                   on_fit=on_fit)
 
 
 def cross_validate(robot: Robot, data: Data, estimator: Estimator = OLS(),
                    model: TorqueModel | str | None = None, *old_args: Any,
-                   folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS, limits: Limits = None,
+                   folds: int | Int[ArrayLike, " T"] | None = None,
+                   validation: Validation | None = None, limits: Limits = None,
                    transmission: TransmissionLike = None, base: BaseParameters | None = None,
-                   smooth_velocity: float = SMOOTH_VELOCITY,
+                   smooth_velocity: float = SMOOTH_VELOCITY, offset_per_recording: bool = False,
                    progress: ProgressCallback | None = None, **old_keywords: Any
                    ) -> CrossValidation:
-    """Cross-validate :func:`~._identify.identify` ``(robot, data, estimator, model)`` over
-    ``folds`` phase folds of the recording (module docstring), or over given fold labels
-    (an integer array, one per sample). ``limits``, ``transmission``, ``base`` and
-    ``smooth_velocity`` as in :func:`~._identify.identify`; ``progress(label, done,
-    total)`` is called after each fold's fit (``total``: the folds)."""
+    """Validate :func:`~._identify.identify` ``(robot, data, estimator, model)``: fit each
+    split of ``validation`` (a :class:`~._splits.Validation`; default ``folds`` phase
+    folds, :data:`DEFAULT_FOLDS`, or ``folds`` given as labels, one integer per sample)
+    and predict it. ``data``: one recording or several (stacked); ``limits``,
+    ``transmission``, ``base``, ``smooth_velocity`` and ``offset_per_recording`` as in
+    :func:`~._identify.identify`; ``progress(label, done, total)`` is called after each
+    split's fit (``total``: the splits)."""
     if old_args or old_keywords:
         data = _old_form("cross_validate", data, (estimator, model, *old_args), 4)
         estimator, model = from_keywords(robot, old_keywords, transmission=transmission,
                                          base=base, smooth_velocity=smooth_velocity)
         transmission, base, smooth_velocity = None, None, SMOOTH_VELOCITY
+    prepared = Prepared.of(robot, data, validation_of(validation, folds))
     model = torque_model(robot, model, transmission=transmission, base=base,
-                         smooth_velocity=smooth_velocity)
+                         smooth_velocity=smooth_velocity,
+                         recordings=_offsets(offset_per_recording, prepared))
     limits = per_joint("limits", limits, robot.n_joints)
     _check_estimator(estimator).check(model, limits)
-    (q, qd, qdd, tau), labels, period = _recording(robot, data, folds)
-    fits = _Fits(progress, _n_folds(labels))
-    return cross_validation_of(estimator, model, model.regressor(q, qd, qdd), tau, limits,
-                               labels, period,
-                               on_fit=fits.after(f"{estimator.name}, {model.friction}"))
+    fits = _Fits(progress, len(prepared.splits))
+    return prepared.validate(estimator, prepared.rows(model, limits),
+                             fits.after(f"{estimator.name}, {model.friction}"))
+
+
+def _offsets(offset_per_recording: bool, prepared: Prepared) -> int:
+    """The ``recordings`` of the torque models: one offset per recording, if asked."""
+    count = len(prepared.recordings)
+    if offset_per_recording and count < 2:
+        raise ValueError("offset_per_recording needs several recordings")
+    return count if offset_per_recording else 1
 
 
 def _check_estimator(estimator):
@@ -173,45 +219,64 @@ class Selection:
 
     @property
     def cross_validation(self) -> CrossValidation:
-        """The chosen candidate's cross-validation."""
+        """The chosen candidate's validation (the one it was chosen by)."""
         return self.candidates[self._index(self.chosen)][1]
 
+    @property
+    def check(self) -> CrossValidation | None:
+        """The chosen candidate's second validation (None when not run)."""
+        return self.checks[self._index(self.chosen)] if self.checks else None
+
+    #: each candidate's validation by a second :class:`~._splits.Validation` (the
+    #: report's other score; empty when not run), in the order of :attr:`candidates`
+    checks: tuple[CrossValidation, ...] = ()
+
     def table(self) -> list[list[str]]:
-        """Rows ``[method, sigma, friction, parameters, CV error +- SE, chosen]``."""
+        """Rows ``[method, sigma, physical, friction, parameters, error +- SE, (the second
+        validation's error,) chosen]``."""
         rows = []
-        for settings, cv in self.candidates:
+        for i, (settings, cv) in enumerate(self.candidates):
             mark = "chosen" if settings is self.chosen else (
                 "lowest" if settings is self.best else "")
+            check = [f"{self.checks[i].score:.4f}"] if self.checks else []
             rows.append([settings["method"], str(settings.get("sigma") or "equal"),
-                         settings["friction"], str(cv.n_parameters),
-                         f"{cv.score:.4f} +- {cv.standard_error:.4f}", mark])
+                         "yes" if settings.get("physical") else "no", settings["friction"],
+                         str(cv.n_parameters), f"{cv.score:.4f} +- {cv.standard_error:.4f}",
+                         *check, mark])
         return rows
 
     def as_dict(self) -> dict:
-        return {"rule": "simplest candidate whose fold-by-fold excess over the lowest "
-                        "cross-validated error is at most one standard error (or 1 % of "
+        return {"rule": "simplest candidate (fewest parameters, then physically consistent, "
+                        "then the earlier estimator) whose split-by-split excess over the "
+                        "lowest validated error is at most one standard error (or 1 % of "
                         "the lowest)",
                 "chosen": self.chosen, "lowest": self.best,
-                "candidates": [{"settings": s, **cv.as_dict()} for s, cv in self.candidates]}
+                "candidates": [{"settings": s, **cv.as_dict(),
+                                **({"check": self.checks[i].as_dict()} if self.checks else {})}
+                               for i, (s, cv) in enumerate(self.candidates)]}
 
 
 def select_model(robot: Robot, data: Data, *old_args: Any,
                  estimators: Estimator | Iterable[Estimator] | None = None,
                  frictions: str | TorqueModel | Iterable[str | TorqueModel] | None = None,
-                 folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS, limits: Limits = None,
+                 folds: int | Int[ArrayLike, " T"] | None = None,
+                 validation: Validation | None = None, limits: Limits = None,
                  transmission: TransmissionLike = None, base: BaseParameters | None = None,
-                 smooth_velocity: float = SMOOTH_VELOCITY,
-                 progress: ProgressCallback | None = None,
+                 smooth_velocity: float = SMOOTH_VELOCITY, offset_per_recording: bool = False,
+                 check: Validation | None = None, progress: ProgressCallback | None = None,
                  weightings: Iterable[tuple[str, Sigma]] | None = None,
                  **old_keywords: Any) -> Selection:
-    """Choose the torque model and the estimator by cross-validation (module docstring).
+    """Choose the torque model and the estimator by validation (module docstring).
 
     ``estimators`` (default :data:`ESTIMATOR_CANDIDATES`; those weighting by the torque
-    limits are skipped without ``limits``) and ``frictions`` (default
-    :data:`FRICTION_CANDIDATES`: friction strings, or TorqueModels) are the grid, simplest
-    first; a ``transmission`` with a coupled motor adds the ``coupling`` term to every
-    friction string. ``progress(label, done, total)`` is called after each fit (``total``:
-    candidates x folds).
+    limits are skipped without ``limits``; physically consistent ones count as simpler
+    than the same unconstrained) and ``frictions`` (default :data:`FRICTION_CANDIDATES`:
+    friction strings, or TorqueModels) are the grid, simplest first; a ``transmission``
+    with a coupled motor adds the ``coupling`` term to every friction string. Every
+    candidate is scored by ``validation`` (default: ``folds`` phase folds, as in
+    :func:`cross_validate`), and by ``check`` too where given (reported, not chosen by).
+    ``progress(label, done, total)`` is called after each fit (``total``: candidates x
+    splits).
     0.2's ``weightings`` ((method, sigma) pairs) and keyword settings (``physical``, ...)
     keep working, deprecated."""
     if old_args or old_keywords or weightings is not None:
@@ -234,32 +299,43 @@ def select_model(robot: Robot, data: Data, *old_args: Any,
         _check_estimator(e)
     K: Any = getattr(transmission, "matrix", transmission)
     coupled = K is not None and bool(coupled_motors(K))
-    (q, qd, qdd, tau), labels, period = _recording(robot, data, folds)
+    prepared = Prepared.of(robot, data, validation_of(validation, folds))
+    checked = None if check is None else Prepared.of(robot, data, check)
+    recordings = _offsets(offset_per_recording, prepared)
     if base is None:  # computed once for every candidate
         base = base_parameters(robot)
-    tried, options = [], []
-    fits = _Fits(progress, len(frictions) * len(estimators) * _n_folds(labels))
+    models = []
     for friction in frictions:
         if isinstance(friction, str) and coupled and "coupling" not in friction:
             friction = friction + "+coupling"
         model = torque_model(robot, friction, transmission=transmission, base=base,
-                             smooth_velocity=smooth_velocity) if isinstance(friction, str) \
-            else torque_model(robot, friction)
-        Y = model.regressor(q, qd, qdd)  # one regressor per torque model
+                             smooth_velocity=smooth_velocity, recordings=recordings) \
+            if isinstance(friction, str) else torque_model(robot, friction)
+        if all(m.friction != model.friction for m in models):  # "+offset" may repeat one
+            models.append(model)
+    per_fit = len(prepared.splits) + (0 if checked is None else len(checked.splits))
+    fits = _Fits(progress, len(models) * len(estimators) * per_fit)
+    tried, options, checks = [], [], []
+    for model in models:
+        rows = prepared.rows(model, limits)  # one regressor per torque model
+        check_rows = None if checked is None else checked.rows(model, limits)
         for estimator in estimators:
             estimator.check(model, limits)
             settings = {"method": estimator.name, "sigma": getattr(estimator, "sigma", None),
-                        "friction": friction if isinstance(friction, str) else model.friction}
-            on_fit = fits.after(f"{estimator.name}, {model.friction}")
-            tried.append((settings, cross_validation_of(estimator, model, Y, tau, limits,
-                                                        labels, period, on_fit=on_fit)))
+                        "physical": estimator.physical, "friction": model.friction}
+            on_fit = fits.after(f"{estimator.name}{' physical' * estimator.physical}, "
+                                f"{model.friction}")
+            tried.append((settings, prepared.validate(estimator, rows, on_fit)))
+            if checked is not None and check_rows is not None:
+                checks.append(checked.validate(estimator, check_rows, on_fit))
             options.append((estimator, model))
     best_settings, best = min(tried, key=lambda c: c[1].score)
-    # simplest: fewest parameters, then the earlier (simpler) estimator
-    order = sorted(range(len(tried)), key=lambda i: (tried[i][1].n_parameters, i))
+    # simplest: fewest parameters, then physically consistent, then the earlier estimator
+    order = sorted(range(len(tried)), key=lambda i: (tried[i][1].n_parameters,
+                                                     not options[i][0].physical, i))
     chosen = next(tried[i][0] for i in order if not_worse(tried[i][1], best))
     return Selection(candidates=tuple(tried), chosen=chosen, best=best_settings,
-                     options=tuple(options))
+                     options=tuple(options), checks=tuple(checks))
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -301,21 +377,23 @@ def choose_prior_strength(robot: Robot, data: Data,
                           estimator: Estimator = PhysicallyConsistent(),
                           model: TorqueModel | str | None = None, *old_args: Any,
                           strengths: Iterable[float] = PRIOR_STRENGTHS,
-                          folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS, limits: Limits = None,
+                          folds: int | Int[ArrayLike, " T"] | None = None,
+                          validation: Validation | None = None, limits: Limits = None,
                           transmission: TransmissionLike = None,
                           base: BaseParameters | None = None,
                           smooth_velocity: float = SMOOTH_VELOCITY,
+                          offset_per_recording: bool = False,
                           progress: ProgressCallback | None = None, **old_keywords: Any
                           ) -> PriorSelection:
     """Choose how strongly a physically consistent fit is pulled toward the a-priori
     parameters (``prior_strength`` of :class:`~._estimators.PhysicallyConsistent`; an
-    ``OLS`` or ``WLS`` ``estimator`` is made physically consistent) by cross-validation
-    over the same phase folds as :func:`select_model`: every strength in ``strengths`` is
-    cross-validated, and the STRONGEST pull whose fold-by-fold excess over the lowest
-    error is within one standard error is kept (the one-standard-error rule: the most
-    regularised model the data cannot tell from the best). The held-out folds are fitted
-    by nothing, chosen by nothing else. ``progress(label, done, total)`` is called after
-    each fit (``total``: strengths x folds)."""
+    ``OLS`` or ``WLS`` ``estimator`` is made physically consistent) by validation
+    (``validation`` or ``folds``, as in :func:`cross_validate`): every strength in
+    ``strengths`` is validated, and the STRONGEST pull whose split-by-split excess over
+    the lowest error is within one standard error is kept (the one-standard-error rule:
+    the most regularised model the data cannot tell from the best). The predicted samples
+    are fitted by nothing, chosen by nothing else. ``progress(label, done, total)`` is
+    called after each fit (``total``: strengths x splits)."""
     strengths = tuple(float(v) for v in strengths)
     if not strengths or any(not (np.isfinite(v) and v >= 0) for v in strengths):
         raise ValueError(f"strengths must be numbers >= 0, at least one, got {strengths}")
@@ -333,18 +411,19 @@ def choose_prior_strength(robot: Robot, data: Data,
     if not isinstance(estimator, PhysicallyConsistent):
         raise ValueError(f"the pull to the prior is a physically consistent least-squares "
                          f"fit: PhysicallyConsistent(...) (of OLS or WLS), not {estimator!r}")
+    prepared = Prepared.of(robot, data, validation_of(validation, folds))
     model = torque_model(robot, model, transmission=transmission, base=base,
-                         smooth_velocity=smooth_velocity)
+                         smooth_velocity=smooth_velocity,
+                         recordings=_offsets(offset_per_recording, prepared))
     limits = per_joint("limits", limits, robot.n_joints)
     estimator.check(model, limits)
-    (q, qd, qdd, tau), labels, period = _recording(robot, data, folds)
-    Y = model.regressor(q, qd, qdd)
+    rows = prepared.rows(model, limits)
     tried, estimators = [], []
-    fits = _Fits(progress, len(strengths) * _n_folds(labels))
+    fits = _Fits(progress, len(strengths) * len(prepared.splits))
     for v in strengths:
         estimators.append(dataclasses.replace(estimator, prior_strength=v))
-        tried.append((v, cross_validation_of(estimators[-1], model, Y, tau, limits, labels,
-                                             period, on_fit=fits.after(f"prior strength {v:g}"))))
+        tried.append((v, prepared.validate(estimators[-1], rows,
+                                           fits.after(f"prior strength {v:g}"))))
     best_v, best = min(tried, key=lambda c: c[1].score)
     chosen = max(v for v, cv in tried if not_worse(cv, best))
     return PriorSelection(candidates=tuple(tried), chosen=chosen, best=best_v,
