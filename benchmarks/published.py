@@ -248,8 +248,9 @@ def nested_row(nested: dict, prefix: str, data, period) -> dict:
         raise RuntimeError(f"{prefix}: the nested benchmark's data differ from these "
                            f"(samples {row['samples']} vs {data.n_samples}); rerun "
                            "python -m benchmarks.real_robots")
-    h = row["nested_held_out_percent"]["default (chosen by cross-validation)"]
-    return {"held_out_stretches": h, "whole_run_fit": row["fit_percent"],
+    h = row["nested_held_out_percent"]["phase"]["default"]
+    return {"held_out_stretches": {"mean": h["mean"], "folds": h["splits"]},
+            "whole_run_fit": row["fit_percent"],
             "chosen_on_all_data": row["chosen_on_all_data"]}
 
 
@@ -291,6 +292,8 @@ def tx40(tmp: Path, nested: dict) -> dict:
     for label, settings in (("figaroh_terms", FIGAROH_LIKE),
                             ("default_choice", ours["chosen_on_all_data"])):
         estimator = sj.Estimator.named(settings["method"], sigma=settings["sigma"])
+        if settings.get("physical"):
+            estimator = sj.PhysicallyConsistent(estimator)
         ident = sj.identify(robot, data, estimator, settings["friction"], limits=limits,
                             base=base, transmission=tr)
         extra = {n: v for n, v in zip(ident.names, ident.values)

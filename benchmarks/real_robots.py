@@ -2,20 +2,26 @@
 (joint torque sensors; two runs of one trajectory), the Franka Emika Panda (link-side
 torque sensors) and the Staubli TX40 (motor side, coupled wrist).
 
-The default chooses method, weighting and torque model by cross-validation over stretches
-of the motion's phase (``sj.select_and_identify``). Its generalisation is measured
-by NESTED cross-validation: the recording's phase is cut into 5 folds; for each, the whole
-choice is made on the other 4 (its own 4-fold cross-validation) and the chosen model,
-fitted to them, predicts the held-out stretch, a part of the motion no choice or fit saw.
-Beside it, fixed settings are scored on the same outer folds: plain OLS (Coulomb + viscous
-friction) and the package's previous default (WLS weighted by 1/limit with offset,
-quadratic and smooth-Coulomb terms, chosen on the KUKA's repeat run), and the same
-choice among physically consistent fits with the pull to the a-priori parameters also
-chosen by the inner cross-validation (``identify --physical --prior-strength cv``;
-``--no-physical`` leaves it out, the slow part). The KUKA's second
-run repeats the first's trajectory: its figure measures repeatability, not generalisation.
+The default (``sj.select_and_identify``) chooses method, weighting, torque model and
+physical consistency by the phase folds and the speed splits pooled (``sj.Pooled``: folds
+of the motion's phase, and each joint's fast samples predicted by a fit to its slow
+ones). Its generalisation is measured on each recording by NESTED validation, the whole
+choice and fit made on one part and judged on another that no choice or fit saw, in two
+ways:
 
-    python -m benchmarks.real_robots [--json benchmarks/results/real_robots.json] [--no-physical]
+- ``phase``: the recording's phase cut into 5 folds; each is predicted by the default
+  chosen and fitted on the other 4 (motions like the fitted one: interpolation);
+- ``speed``: for each joint, the samples where it moves faster than 0.8 of its peak speed
+  are predicted by the default chosen and fitted on those where it moves slower than 0.7:
+  a faster motion.
+
+Beside it, on the same outer splits: the same 24 candidates chosen by the speed splits
+alone and by the phase folds alone (what each part of the validation does), 0.4's
+default (the choice by phase folds among the 12 unconstrained fits only) and plain OLS
+(Coulomb + viscous friction). The KUKA's second run repeats the first's trajectory: its
+figure measures repeatability, not generalisation.
+
+    python -m benchmarks.real_robots [--json benchmarks/results/real_robots.json]
 
 Figures: NRMS over the joint torque limits [%] (RMS error / (2 limit), mean over joints).
 """
@@ -35,14 +41,13 @@ import sedsabso_jax as sj
 from benchmarks.output import to_json
 from data import real_robots
 from sedsabso_jax.dynamics import joint_limits
-from sedsabso_jax.identification import phase_folds
 
-PHYSICAL = "physical, chosen by cross-validation (model and pull to the prior)"
-FIXED = {
-    "OLS, Coulomb + viscous": (sj.OLS(), "viscous-coulomb"),
-    "previous default: WLS 1/limit, offset+quadratic+smooth":
-        (sj.WLS("limits"), "viscous-coulomb+offset+quadratic+smooth"),
-}
+DEFAULT = "default"
+BY_SPEED = "the same candidates chosen by speed splits alone"
+BY_PHASE = "the same candidates chosen by phase folds alone"
+PREVIOUS = "0.4's default: phase folds, unconstrained"
+PLAIN = "OLS, Coulomb + viscous"
+SETTINGS = (DEFAULT, BY_SPEED, BY_PHASE, PREVIOUS, PLAIN)
 
 
 def datasets(tmp: Path):
@@ -62,74 +67,84 @@ def datasets(tmp: Path):
            joint_limits("staubli_tx40", tx40), tr, {})
 
 
+
 def nrms(ident, data, limits) -> float:
     pred = ident.predict(data.q, data.qd, data.qdd)
     return sj.validation_metrics(data.tau, pred, limits.torque_limits).nrms_limits_percent
 
 
-def subset(data, mask):
-    return (data.times[mask], data.q[mask], data.qd[mask], data.qdd[mask], data.tau[mask])
+def subset(data: sj.Measurements, mask) -> sj.Measurements:
+    return sj.Measurements(data.times[mask], data.q[mask], data.qd[mask], data.qdd[mask],
+                           data.tau[mask])
 
 
-def fixed(robot, data, estimator, friction, limits, transmission, base):
-    """``identify`` with one of :data:`FIXED`."""
-    model = sj.TorqueModel.of(robot, friction, transmission=transmission, base=base)
-    return sj.identify(robot, data, estimator, model, limits=limits)
-
-
-def evaluate(name, robot, data, limits, transmission, runs, folds=5, physical=True) -> dict:
-    base = sj.base_parameters(robot)
+def fits(robot, train: sj.Measurements, limits, transmission, base, inner) -> dict:
+    """The settings on ``train``: the reports of the choices, plain OLS's
+    identification; ``inner``: the phase folds (a count, or labels) of the choices by
+    phase folds and of the default's second validation."""
     common = dict(limits=limits.torque_limits, base=base, transmission=transmission)
-    labels, period = phase_folds(data.times, data.q, folds)
-    t0 = time.perf_counter()
-    held = {"default (chosen by cross-validation)": [], **{k: [] for k in FIXED}}
-    if physical:
-        held[PHYSICAL] = []
-    chosen_per_fold, physical_per_fold = [], []
-    for k in range(folds):
-        train, test = labels != k, labels == k
-        inner = np.searchsorted(np.unique(labels[train]), labels[train])  # folds 0..3
-        tr = subset(data, train)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            default = sj.select_and_identify(robot, tr, folds=inner, **common)
-            fits = {"default (chosen by cross-validation)": default.ident}
-            for label, (estimator, friction) in FIXED.items():
-                fits[label] = fixed(robot, tr[1:], estimator, friction, **common)
-            if physical:  # the whole choice again, among physically consistent fits
-                chosen = sj.select_and_identify(robot, tr, folds=inner, physical=True,
-                                                prior_strength="cv", **common)
-                fits[PHYSICAL] = chosen.ident
-                physical_per_fold.append({**chosen.selection.chosen,
-                                          "prior_strength": chosen.prior_selection.chosen})
-            for label, ident in fits.items():
-                pred = ident.predict(data.q[test], data.qd[test], data.qdd[test])
-                held[label].append(sj.validation_metrics(
-                    data.tau[test], pred, limits.torque_limits).nrms_limits_percent)
-        chosen_per_fold.append(default.selection.chosen)
-    nested_s = time.perf_counter() - t0
+    phase = sj.GivenFolds(inner) if np.ndim(inner) == 1 else sj.PhaseFolds(inner)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        report = sj.select_and_identify(robot, data, folds=folds, **common)
-        full, final = report.selection, report.ident
-        other_runs = {}
-        for run, d in runs.items():
-            other_runs[run] = {"default": nrms(final, d, limits)}
-            for label, (estimator, friction) in FIXED.items():
-                other_runs[run][label] = nrms(fixed(robot, data, estimator, friction, **common),
-                                              d, limits)
-    cv_chosen = full.cross_validation
+        default = sj.select_and_identify(robot, train, folds=inner, **common)
+        by_speed = sj.select_and_identify(robot, train, validation=sj.SpeedSplits(),
+                                          **common)
+        by_phase = sj.select_and_identify(robot, train, folds=inner, validation=phase,
+                                          **common)
+        previous = sj.select_and_identify(robot, train, physical=False, folds=inner,
+                                          validation=phase, **common)
+        model = sj.TorqueModel.of(robot, "viscous-coulomb", transmission=transmission,
+                                  base=base)
+        plain = sj.identify(robot, train, sj.OLS(), model, limits=limits.torque_limits)
+    return {DEFAULT: default, BY_SPEED: by_speed, BY_PHASE: by_phase, PREVIOUS: previous,
+            PLAIN: plain}
+
+
+def _ident(fit):
+    return fit if isinstance(fit, sj.Identification) else fit.ident
+
+
+def evaluate(name, robot, data, limits, transmission, runs, folds=5) -> dict:
+    base = sj.base_parameters(robot)
+    t0 = time.perf_counter()
+    phase = sj.PhaseFolds(folds).splits([data])
+    speed = sj.SpeedSplits().splits([data])
+    held: dict = {"phase": {k: [] for k in SETTINGS}, "speed": {k: [] for k in SETTINGS}}
+    chosen: dict = {"phase": [], "speed": []}
+    predicted: dict = {"phase": [], "speed": []}
+    for kind, splits in (("phase", phase), ("speed", speed)):
+        for train, test in zip(splits.train, splits.test):
+            # phase: the inner folds are the outer ones left; speed: the slow part's own
+            inner = (np.searchsorted(np.unique(phase.labels[train]), phase.labels[train])
+                     if kind == "phase" else folds)
+            found = fits(robot, subset(data, train), limits, transmission, base, inner)
+            for label, fit in found.items():
+                held[kind][label].append(nrms(_ident(fit), subset(data, test), limits))
+            chosen[kind].append({**found[DEFAULT].selection.chosen})
+            predicted[kind].append(found[DEFAULT].cross_validation.score)
+    nested_s = time.perf_counter() - t0
+    full = fits(robot, data, limits, transmission, base, folds)
+    other_runs = {run: {label: nrms(_ident(f), d, limits) for label, f in full.items()}
+                  for run, d in runs.items()}
+    report = full[DEFAULT]
     return {
-        "robot": name, "samples": data.n_samples, "period_s": period,
-        "nested_held_out_percent": {k: {"mean": float(np.mean(v)), "folds": v}
-                                    for k, v in held.items()},
-        "chosen_per_outer_fold": chosen_per_fold,
-        "physical_chosen_per_outer_fold": physical_per_fold or None,
-        "chosen_on_all_data": full.chosen, "cv_of_chosen_percent": cv_chosen.score,
-        "cv_standard_error": cv_chosen.standard_error,
-        "fit_percent": final.fit["nrms_limits_percent"], "other_runs": other_runs,
-        "candidates": [{"settings": s, "cv": cv.score, "se": cv.standard_error,
-                        "n_parameters": cv.n_parameters} for s, cv in full.candidates],
+        "robot": name, "samples": data.n_samples, "period_s": phase.period_s,
+        "nested_held_out_percent": {kind: {k: {"mean": float(np.mean(v)), "splits": v}
+                                           for k, v in rows.items()}
+                                    for kind, rows in held.items()},
+        "default_chosen_per_outer_split": chosen,
+        "default_predicted_per_outer_split": predicted,
+        "chosen_on_all_data": report.selection.chosen,
+        "predicted_percent": report.cross_validation.score,
+        "predicted_standard_error": report.cross_validation.standard_error,
+        "part_scores": report.cross_validation.part_scores,
+        "by_speed_choice_on_all_data": full[BY_SPEED].selection.chosen,
+        "by_phase_choice_on_all_data": full[BY_PHASE].selection.chosen,
+        "previous_choice_on_all_data": full[PREVIOUS].selection.chosen,
+        "fit_percent": report.ident.fit["nrms_limits_percent"], "other_runs": other_runs,
+        "candidates": [{"settings": s, "score": cv.score, "se": cv.standard_error,
+                        **cv.part_scores, "n_parameters": cv.n_parameters}
+                       for s, cv in report.selection.candidates],
         "nested_seconds": nested_s,
     }
 
@@ -137,8 +152,6 @@ def evaluate(name, robot, data, limits, transmission, runs, folds=5, physical=Tr
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", default="benchmarks/results/real_robots.json")
-    ap.add_argument("--no-physical", action="store_true",
-                    help="leave out the physically consistent choice (the slow part)")
     args = ap.parse_args(argv)
     jax.config.update("jax_enable_x64", True)
     import tempfile
@@ -146,27 +159,20 @@ def main(argv=None):
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, robot, data, limits, tr, runs in datasets(Path(tmp)):
-            rows.append(evaluate(name, robot, data, limits, tr, runs,
-                                 physical=not args.no_physical))
+            rows.append(evaluate(name, robot, data, limits, tr, runs))
             r = rows[-1]
-            phys = r["nested_held_out_percent"].get(PHYSICAL)
-            print(f"{name}: chosen {r['chosen_on_all_data']}, CV {r['cv_of_chosen_percent']:.4f}"
-                  f" %, nested {r['nested_seconds']:.0f} s"
-                  + (f"; physical, nested {phys['mean']:.4f} %" if phys else ""), flush=True)
-    print("\n| robot | held-out stretch, default (nested CV) | OLS Coulomb + viscous | "
-          "previous default | default's choice on all data | its CV | other runs |")
-    print("|---|---|---|---|---|---|---|")
+            print(f"{name}: chosen {r['chosen_on_all_data']}, predicted "
+                  f"{r['predicted_percent']:.4f} %, nested {r['nested_seconds']:.0f} s",
+                  flush=True)
+    print("\n| robot | outer splits | " + " | ".join(SETTINGS) + " |")
+    print("|---|---|" + "---|" * len(SETTINGS))
     for r in rows:
-        h = r["nested_held_out_percent"]
-        c = r["chosen_on_all_data"]
-        runs = "; ".join(f"{k}: {v['default']:.4f} (previous default "
-                         f"{v[list(FIXED)[1]]:.4f})" for k, v in r["other_runs"].items())
-        print(f"| {r['robot']} | **{h['default (chosen by cross-validation)']['mean']:.4f}** | "
-              f"{h[list(FIXED)[0]]['mean']:.4f} | {h[list(FIXED)[1]]['mean']:.4f} | "
-              f"{c['method']} {c['sigma'] or 'equal'}, {c['friction']} | "
-              f"{r['cv_of_chosen_percent']:.4f} | {runs or '-'} |")
+        for kind, h in r["nested_held_out_percent"].items():
+            print(f"| {r['robot']} | {kind} | "
+                  + " | ".join(f"{h[k]['mean']:.4f}" for k in SETTINGS) + " |")
     doc = {"machine": platform.processor() or platform.machine(), "rows": rows,
-           "versions": {"sedsabso_jax": sj.__version__}}
+           "versions": {"sedsabso_jax": sj.__version__},
+           "command": "python -m benchmarks.real_robots"}
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(to_json(doc))
     print(f"written: {args.json}")

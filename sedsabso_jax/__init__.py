@@ -54,6 +54,7 @@ from .identification._model import TorqueModel as TorqueModel
 from .identification._report import IdentificationReport as IdentificationReport
 from .identification._splits import GivenFolds as GivenFolds
 from .identification._splits import PhaseFolds as PhaseFolds
+from .identification._splits import Pooled as Pooled
 from .identification._splits import RecordingFolds as RecordingFolds
 from .identification._splits import SpeedSplits as SpeedSplits
 from .identification._splits import Validation as Validation
@@ -92,7 +93,7 @@ __all__ = [
     "TorqueModel", "Estimator", "OLS", "WLS", "L1", "LevenbergMarquardt", "BoxSearch",
     "PhysicallyConsistent", "validation_metrics", "Metrics", "cross_validate",
     "select_model", "choose_prior_strength", "Validation", "PhaseFolds", "SpeedSplits",
-    "RecordingFolds", "GivenFolds",
+    "RecordingFolds", "GivenFolds", "Pooled",
 ]
 
 #: Old root names, kept with a warning through 0.3.x.

@@ -56,8 +56,9 @@ def test_rs010n_noise_free_recovers_the_true_parameters(rs010n_files, tmp_path, 
 
 def test_kuka_real_data_end_to_end(tmp_path, capsys):
     """A slice of the real KUKA LWR4+ runs: the default method identifies on run 1 and
-    validates on run 2; the JSON has the documented keys, the model chosen by the speed
-    splits on run 1's slice (24 candidates: 12 unconstrained, 12 physically consistent)
+    validates on run 2; the JSON has the documented keys, the model chosen by the pooled
+    phase folds and speed splits on run 1's slice (24 candidates: 12 unconstrained, 12
+    physically consistent)
     is the physically consistent OLS fit with offset, quadratic and smooth friction, and
     the held-out NRMS over the torque limits is pinned to +-5 % (measured 0.15069 % on
     these slices; plain OLS with Coulomb + viscous friction gives 0.217 %, outside the
@@ -70,7 +71,7 @@ def test_kuka_real_data_end_to_end(tmp_path, capsys):
     assert code == 0
     doc = json.loads((tmp_path / "r.json").read_text())
     assert set(doc) == {"base_parameters", "fit", "validation", "settings",
-                        "cross_validation", "check", "extrapolation"}
+                        "cross_validation", "extrapolation"}
     assert len(doc["base_parameters"]["names"]) == len(doc["base_parameters"]["values"])
     val = doc["validation"]
     assert len(val["nrms_range_percent"]) == len(val["relative_rms_percent"]) == 7
@@ -80,9 +81,9 @@ def test_kuka_real_data_end_to_end(tmp_path, capsys):
             doc["settings"]["physical"]) == ("OLS", "viscous-coulomb+offset+quadratic+smooth",
                                              True)
     cv = doc["cross_validation"]
-    assert cv["validation"]["kind"] == "speed splits" and len(cv["fold_scores"]) == 7
+    assert cv["validation"]["kind"] == "pooled" and len(cv["fold_scores"]) == 5 + 7
+    assert set(cv["part_scores"]) == {"phase folds", "speed splits"}
     assert len(cv["selection"]["candidates"]) == 24 and 0.15 < cv["score"] < 0.3
-    assert doc["check"]["validation"]["kind"] == "phase folds"
 
 
 def _write_bad(tmp_path, case: str, good: str) -> str:

@@ -75,6 +75,10 @@ def test_identify_urdf_out(tmp_path, capsys):
     np.testing.assert_allclose(pin_torques(urdf, q, qd, qdd) + offsets, predicted, atol=1e-6)
     capsys.readouterr()
     urdf.unlink()
-    assert cli.main([a for a in argv if a != "--physical"]) == 2
-    assert "--urdf-out needs --physical" in capsys.readouterr().err
+    # --urdf-out alone keeps only physically consistent candidates; --no-physical
+    # contradicts it: exit 2, nothing written
+    assert cli.main([a if a != "--physical" else "--no-physical" for a in argv]) == 2
+    assert "--urdf-out needs physically consistent link parameters" in capsys.readouterr().err
     assert not urdf.exists()
+    assert cli.main([a for a in argv if a != "--physical"]) == 0
+    assert "physically consistent" in urdf.read_text()

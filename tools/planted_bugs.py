@@ -32,6 +32,7 @@ BASELINES = [*FAST, "tests/test_baselines.py", "tests/test_identification.py"]
 KERNELS = [*FAST, "tests/test_backends.py", "tests/test_swarms.py"]
 COMPARE = ["tests/test_compare.py"]
 COMPOSE = ["tests/test_composition.py"]
+VALIDATIONS = ["tests/test_validations.py"]
 
 #: (module, text, replacement, what the bug is, tests to run, reason if equivalent)
 BUGS = [
@@ -129,6 +130,31 @@ BUGS = [
     ("optim/_box.py", "half = np.maximum(fraction * np.abs(centre), floor)",
      "half = fraction * np.abs(centre) + floor", "the box rule adds the floor", BASELINES,
      None),
+    ("identification/_splits.py", "test = tuple(speed[:, i] > self.predict_above",
+     "test = tuple(speed[:, i] > self.fit_below", "speed splits predict from the wrong "
+     "threshold", VALIDATIONS, None),
+    ("identification/_compressed.py", "floor[j] = max(float(self.s[j] - c @ c), 0.0)",
+     "floor[j] = 0.0", "normal equations forget the residual the rows leave out (Gautier's "
+     "weights)", VALIDATIONS, None),
+    ("identification/_compressed.py",
+     "everything - NormalEquations.of(Y[~keep], tau[~keep])",
+     "everything - NormalEquations.of(Y[keep], tau[keep])",
+     "a subset's normal equations subtract the wrong rows", VALIDATIONS, None),
+    ("identification/_compressed.py", "            rows[:, norms == 0] = 0.0",
+     "            pass", "rounding left in the columns a joint does not see (Gautier's "
+     "column count)", VALIDATIONS, None),
+    ("identification/_model.py", "share = np.full(batch + (R,), 1.0 / R)",
+     "share = np.full(batch + (R,), 1.0)", "new motions get the sum of the recordings' "
+     "offsets, not their mean", VALIDATIONS, None),
+    ("identification/_physical.py", "    problem.solve(solver=cp.CLARABEL)\n    return problem",
+     "    return problem", "the conic programme's first solve takes another path (not "
+     "repeatable)", VALIDATIONS, None),
+    ("identification/_physical.py", "        constraints.append(extras[list(nonneg)] >= 0)",
+     "        pass", "quadratic friction may turn negative in a physical fit", VALIDATIONS,
+     None),
+    ("identification/_identify.py", "if max(rates) > (1 + RATE_TOLERANCE) * min(rates):",
+     "if max(rates) > 2 * (1 + RATE_TOLERANCE) * min(rates):",
+     "recordings at twice the rate of another accepted", VALIDATIONS, None),
 ]
 
 

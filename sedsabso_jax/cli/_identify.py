@@ -22,7 +22,7 @@ from ._common import (
     subcommand,
 )
 
-#: ``--method``, ``--weights`` and ``--friction`` left to cross-validation.
+#: ``--method``, ``--weights`` and ``--friction`` left to validation.
 AUTO = "auto"
 WEIGHTS = (AUTO, "residual", "limits", "equal")
 
@@ -96,7 +96,6 @@ def _urdf_source(robot: str) -> AbstractContextManager[Any]:
 def run(args: argparse.Namespace) -> None:
     """The subcommand: check the flags, load, build the objects, one call, print, write."""
     from ..dynamics import _robots as robots
-    from ..identification._folds import DEFAULT_FOLDS
     from ..identification._splits import PhaseFolds, RecordingFolds, SpeedSplits
     from ..dynamics._limits import joint_limits
     from ..identification._auto import estimator_candidates, select_and_identify
@@ -150,9 +149,10 @@ def run(args: argparse.Namespace) -> None:
         raise ValueError("--folds 0 turns validation off, so nothing can be chosen by it: "
                          "give --method, --weights and --friction (the fit is unconstrained "
                          "unless --physical)")
-    validation = {"speed": SpeedSplits(), "phase": PhaseFolds(args.folds or DEFAULT_FOLDS),
-                  "recordings": RecordingFolds()}[args.validation]
-    with Progress("identify") as progress:  # cross-validation fits, conic solves
+    validation = None if args.folds == 0 else {
+        "pooled": None, "speed": SpeedSplits(), "phase": PhaseFolds(args.folds),
+        "recordings": RecordingFolds()}[args.validation]  # None: the default, pooled
+    with Progress("identify") as progress:  # validation fits, conic solves
         report = select_and_identify(robot, data, held_out=held_out, limits=limits,
                                      transmission=transmission, estimators=estimators,
                                      frictions=frictions, validation=validation,
@@ -185,7 +185,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         description="Identify base parameters from joint data (.npz with keys positions, "
         "velocities, accelerations, torques, times; or .csv with a header time,q1..,qd1..,"
         "qdd1..,tau1..) and validate on held-out data. What is left 'auto' is chosen by "
-        "cross-validation. Flags may also come from a --config file; the command line wins.",
+        "validation (--validation), physically consistent or not unless --physical or "
+        "--no-physical. Flags may also come from a --config file; the command line wins.",
         examples=["sedsabso-jax identify --robot kuka_lwr4 --data run1.npz --validate "
                   "run2.npz",
                   "sedsabso-jax identify --config identify.toml --physical --out results"])
@@ -225,14 +226,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     model = ip.add_argument_group("torque model")
     model.add_argument("--friction", metavar="TERMS", default=AUTO,
                        help=f"terms of {', '.join(FRICTION_TERMS)} joined by +; auto "
-                       "(default): chosen by cross-validation among viscous-coulomb, "
+                       "(default): chosen by validation among viscous-coulomb, "
                        "+offset, +offset+armature, +offset+quadratic+smooth")
     est = ip.add_argument_group("estimator")
     est.add_argument("--method", choices=(AUTO, *Estimator.registered()), default=AUTO,
-                     help="estimator; auto (default): OLS or WLS, chosen by cross-validation")
+                     help="estimator; auto (default): OLS or WLS, chosen by validation")
     est.add_argument("--weights", choices=WEIGHTS, default=AUTO,
                      help="row weights per joint: residual (Gautier's two-step WLS), limits "
-                     "(1 / torque limit), equal; auto (default): chosen by cross-validation")
+                     "(1 / torque limit), equal; auto (default): chosen by validation")
     est.add_argument("--physical", action=argparse.BooleanOptionalAction, default=None,
                      help="only physically consistent parameters (OLS/WLS): positive-definite "
                      "pseudo-inertia per link, friction >= 0; --no-physical: only "
@@ -240,7 +241,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     est.add_argument("--prior-strength", type=_prior_strength, default=0.0, metavar="S|cv",
                      help="with --physical: pull toward the robot's a-priori parameters, in "
                      "multiples of the data term's mean curvature (0), or 'cv' to choose it "
-                     "by cross-validation from " + ", ".join(f"{v:g}" for v in PRIOR_STRENGTHS))
+                     "by validation from " + ", ".join(f"{v:g}" for v in PRIOR_STRENGTHS))
     est.add_argument("--runs", metavar="N", type=positive_int, default=1,
                      help="swarm runs, the best kept (1)")
     est.add_argument("--iterations", metavar="N", type=positive_int, default=600,
@@ -250,16 +251,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     val = ip.add_argument_group("validation")
     val.add_argument("--validate", metavar="FILE", default=None,
                      help="held-out data (.npz or .csv): judges the fit, never chooses it")
-    val.add_argument("--validation", choices=("speed", "phase", "recordings"),
-                     default="speed",
+    val.add_argument("--validation", choices=("pooled", "speed", "phase", "recordings"),
+                     default="pooled",
                      help="what chooses what is auto and predicts the error on new motions: "
-                     "speed (default): for each joint, fit where it moves below 0.7 of its "
-                     "peak speed and predict above 0.8; phase: folds of the motion's phase; "
-                     "recordings: leave one --data file out")
+                     "pooled (default): the phase folds (or, for several --data files, "
+                     "leave one out) and the speed splits together; speed: for each joint, "
+                     "fit where it moves below 0.7 of its peak speed and predict above 0.8; "
+                     "phase: folds of the motion's phase; recordings: leave one --data file "
+                     "out")
     val.add_argument("--folds", metavar="K", type=non_negative_int, default=5,
-                     help="folds over the motion's phase (5), reported beside the validation "
-                     "(interpolation; with several --data files, leave one out instead); 0: "
-                     "no validation at all")
+                     help="folds over the motion's phase (5); 0: no validation at all")
     val.add_argument("--offset-per-recording", action="store_true",
                      help="one torque offset per joint and --data file (a sensor zero that "
                      "moved between them); new motions get their mean")

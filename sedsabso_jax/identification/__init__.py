@@ -2,9 +2,11 @@
 the estimators ``OLS``, ``WLS``, ``L1``, ``LevenbergMarquardt``, ``BoxSearch``,
 ``PhysicallyConsistent`` and their base ``Estimator``, ``TorqueModel``,
 ``Identification``, ``IdentificationReport``, ``cross_validate``, ``select_model``,
-``choose_prior_strength``, ``validation_metrics``, ``Metrics``): what writing a new
-estimator needs, the cross-validation's parts and results, the default candidates, and how far
-held-out data extrapolate (``extrapolation``).
+``choose_prior_strength``, ``validation_metrics``, ``Metrics``, and the validations
+``Validation``, ``PhaseFolds``, ``SpeedSplits``, ``RecordingFolds``, ``GivenFolds``,
+``Pooled``): what
+writing a new estimator needs, the validation's parts and results, the default
+candidates, and how far held-out data extrapolate (``extrapolation``).
 Builds on :mod:`sedsabso_jax.dynamics`, :mod:`sedsabso_jax.optim` and
 :mod:`sedsabso_jax.measurements`."""
 
@@ -19,6 +21,7 @@ from ._fitting import FitProblem as FitProblem
 from ._fitting import weigh as weigh
 from ._folds import DEFAULT_FOLDS as DEFAULT_FOLDS
 from ._folds import CrossValidation as CrossValidation
+from ._folds import Splits as Splits
 from ._folds import phase_folds as phase_folds
 from ._folds import repeat_period as repeat_period
 from ._metrics import nrms_over_limits as nrms_over_limits
@@ -34,7 +37,7 @@ __all__ = [
     "FitProblem", "EstimatorFit", "weigh", "CrossValidation", "phase_folds",
     "repeat_period", "DEFAULT_FOLDS", "Selection", "PriorSelection", "FRICTION_CANDIDATES",
     "ESTIMATOR_CANDIDATES", "PRIOR_STRENGTHS", "estimator_candidates", "nrms_over_limits",
-    "FRICTION_TERMS", "figure_torques", "extrapolation", "Extrapolation",
+    "FRICTION_TERMS", "figure_torques", "extrapolation", "Extrapolation", "Splits",
 ]
 
 #: Names that moved to the package root (0.3), kept with a warning through 0.3.x.

@@ -1,5 +1,5 @@
 """The command's default as one call: choose the torque model and the estimator by
-cross-validation, then (physically consistent fits) the pull to the prior, then fit, and
+validation, then (physically consistent fits) the pull to the prior, then fit, and
 judge the fit on held-out data::
 
     report = select_and_identify(robot, data, held_out=other_run, limits=limits)
@@ -12,7 +12,7 @@ judge the fit on held-out data::
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
@@ -27,7 +27,7 @@ from ._fitting import Estimator, Limits, ProgressCallback, Sigma
 from ._identify import Data, identify, recordings_of, torque_model
 from ._model import TorqueModel
 from ._report import IdentificationReport
-from ._splits import GivenFolds, PhaseFolds, RecordingFolds, SpeedSplits, Validation
+from ._splits import GivenFolds, PhaseFolds, Pooled, RecordingFolds, SpeedSplits, Validation
 from ._validation import (
     DEFAULT_FOLDS,
     ESTIMATOR_CANDIDATES,
@@ -40,7 +40,7 @@ from ._validation import (
 
 #: The weightings a fixed estimator is tried with (None: equal), simplest first.
 SIGMA_CANDIDATES = (None, "residual", "limits")
-#: ``sigma`` of :func:`estimator_candidates` that leaves the weighting to cross-validation.
+#: ``sigma`` of :func:`estimator_candidates` that leaves the weighting to validation.
 AUTO = "auto"
 
 
@@ -111,19 +111,20 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
        sequence, e.g. :func:`estimator_candidates`), unconstrained and physically
        consistent (``physical`` None; True: only physically consistent, False: only
        unconstrained), with every torque model of ``frictions`` (default
-       :data:`~._validation.FRICTION_CANDIDATES`) is scored by ``validation`` (default
-       :class:`~._splits.SpeedSplits`: the error of a model asked to extrapolate in
-       speed, which predicts the error on new, faster motions) and the simplest within one
-       standard error of the lowest is kept (:func:`~._validation.select_model`). Every
-       candidate is also scored by the second validation, the check: ``folds`` folds of the
-       motion's phase (interpolation; a count, or fold labels) for one recording, leave one
-       recording out for several. With one candidate, it is only validated (``folds=0``:
-       not at all).
+       :data:`~._validation.FRICTION_CANDIDATES`) is scored by ``validation`` and the
+       simplest within one standard error of the lowest is kept
+       (:func:`~._validation.select_model`). The default validation,
+       :func:`default_validation`, pools ``folds`` folds of the motion's phase (a count,
+       or fold labels; leave one recording out for several recordings), where the model
+       interpolates, with :class:`~._splits.SpeedSplits`, where it must extrapolate in
+       speed as on a faster motion: its score is the error to expect on new motions, and
+       the report gives each part's too. With one candidate, it is only validated
+       (``folds=0``: not at all).
     2. ``prior_strength``, a number or ``"cv"`` (chosen from
        :data:`~._validation.PRIOR_STRENGTHS` by the same validation,
        :func:`~._validation.choose_prior_strength`), pulls a physically consistent fit
        toward the robot's a-priori parameters.
-    3. The fit on all of ``data``, judged on it, on both validations and on ``held_out``
+    3. The fit on all of ``data``, judged on it, on the validation and on ``held_out``
        (never used to choose or fit).
 
     ``data``: a :class:`~sedsabso_jax.Measurements`, several (recordings of one rate,
@@ -135,8 +136,8 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
     fit, ``done`` running 1..``total`` over the whole call (None: quiet). Returns the
     :class:`~._report.IdentificationReport` the command prints (``text()``) and writes
     (``write(...)``)."""
-    held_out = None if held_out is None else recordings_of(robot, held_out)
-    if held_out is not None and len(held_out) > 1:
+    held = None if held_out is None else recordings_of(robot, held_out)
+    if held is not None and len(held) > 1:
         raise ValueError("held_out must be one recording")
     estimators = ESTIMATOR_CANDIDATES if estimators is None else (
         (estimators,) if isinstance(estimators, Estimator) else tuple(estimators))
@@ -161,28 +162,29 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
     if off and choose:
         raise ValueError("folds=0 turns validation off, so nothing can be chosen by it: "
                          "give one estimator and one friction model")
+    if off and validation is not None:
+        raise ValueError("folds=0 turns validation off: give no validation, or folds > 1")
     recordings = recordings_of(robot, data)
-    several = len(recordings) > 1
-    validation = SpeedSplits() if validation is None else validation
-    check: Validation | None = None if off else RecordingFolds() if several else (
-        GivenFolds(folds) if np.ndim(folds) == 1 else PhaseFolds(int(folds)))  # type: ignore[arg-type]
+    if validation is None and not off:
+        validation = default_validation(recordings, folds)
     base = base_parameters(robot) if base is None else base
     common: dict[str, Any] = dict(limits=limits, transmission=transmission, base=base,
                                   offset_per_recording=offset_per_recording)
-    n_val, n_check = (0, 0) if check is None else (len(validation.splits(recordings)),
-                                                    len(check.splits(recordings)))
-    later = 1 + (len(PRIOR_STRENGTHS) * n_val + n_check if prior_strength == "cv" else 0)
+    # the fits after the model choice, for the progress: the prior's validation, the fit
+    later = 1 + (len(PRIOR_STRENGTHS) * len(validation.splits(recordings))
+                 if progress is not None and validation is not None and prior_strength == "cv"
+                 else 0)
     stages = _Stages(progress)
-    selection = cv = checked = None
+    selection = cv = None
     model: TorqueModel | str
-    if off:
+    if validation is None:
         estimator, model = estimators[0], frictions[0]
     else:
         selection = select_model(robot, recordings, estimators=estimators,
-                                 frictions=frictions, validation=validation, check=check,
+                                 frictions=frictions, validation=validation,
                                  progress=stages.stage(later), **common)
         estimator, model = selection.estimator, selection.model
-        cv, checked = selection.cross_validation, selection.check
+        cv = selection.cross_validation
     if not isinstance(model, TorqueModel):
         model = torque_model(robot, model, transmission=transmission, base=base,
                              recordings=len(recordings) if offset_per_recording else 1)
@@ -191,16 +193,26 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
         prior_selection = choose_prior_strength(robot, recordings, estimator, model,
                                                 strengths=PRIOR_STRENGTHS,
                                                 validation=validation, limits=limits,
-                                                progress=stages.stage(n_check + 1))
+                                                progress=stages.stage(1))
         estimator, cv = prior_selection.estimator, prior_selection.cross_validation
-        checked = cross_validate(robot, recordings, estimator, model, validation=check,
-                                 limits=limits, progress=stages.stage(1))
     ident = identify(robot, recordings, estimator, model, limits=limits)
     if progress is not None:
         progress("fit on all the data", stages.done + 1, stages.done + 1)
-    return IdentificationReport.evaluate(ident, recordings, held_out and held_out[0], limits,
-                                         cross_validation=cv, check=checked,
-                                         selection=selection, prior_selection=prior_selection)
+    return IdentificationReport.evaluate(ident, recordings, None if held is None else held[0],
+                                         limits,
+                                         cross_validation=cv, selection=selection,
+                                         prior_selection=prior_selection)
+
+
+def default_validation(recordings: Sequence[Measurements],
+                       folds: int | Int[ArrayLike, " T"] = DEFAULT_FOLDS) -> Validation:
+    """What ``select_and_identify`` chooses by unless told: ``Pooled((PhaseFolds(folds),
+    SpeedSplits()))`` (:class:`~._splits.GivenFolds` for fold labels), with
+    :class:`~._splits.RecordingFolds` instead of the phase folds for several
+    recordings."""
+    interpolation: Validation = RecordingFolds() if len(recordings) > 1 else (
+        GivenFolds(folds) if np.ndim(folds) == 1 else PhaseFolds(int(folds)))  # type: ignore[arg-type]
+    return Pooled((interpolation, SpeedSplits()))
 
 
 def _with_physical(estimators: tuple[Estimator, ...], physical: bool | None

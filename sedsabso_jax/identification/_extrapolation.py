@@ -20,7 +20,7 @@ that would set true extremes; a motion time-scaled by s still gives exactly s (a
 
 The thresholds (:data:`SPEED_THRESHOLD` 1.25, :data:`ACCELERATION_THRESHOLD` 1.5,
 :data:`POSITION_THRESHOLD` 0.10) lie between a repeat of the fitted motion (ratios near 1,
-nothing beyond) and the speeds where cross-validation was measured to be optimistic
+nothing beyond) and the speeds where the predicted error was measured to be optimistic
 (1.5x and more)."""
 
 from __future__ import annotations
@@ -94,8 +94,8 @@ class Extrapolation:
         if not parts:
             return None
         return ("held-out data go beyond the identification data (x: peak over the fitted "
-                "peak), where the fit extrapolates and cross-validation underestimates the "
-                "error: " + "; ".join(parts))
+                "peak), where the fit extrapolates and its predicted error may be too low: "
+                + "; ".join(parts))
 
     def warn(self) -> None:
         """A ``UserWarning`` with :meth:`message`, if any joint is beyond a threshold."""

@@ -76,7 +76,7 @@ def weighting(sigma: Sigma, default: str = "equal") -> str:
 @dataclasses.dataclass(frozen=True, eq=False)
 class FitProblem:
     """The rows an estimator fits, checked: the torque ``model``, its regressor
-    ``Y (T, n, d)`` and the torques ``tau (T, n)`` (all samples, or a cross-validation's
+    ``Y (T, n, d)`` and the torques ``tau (T, n)`` (all samples, or a validation's
     training folds), the per-joint torque ``limits`` (or None), and ``warn``: report a
     rank-deficient or ill-conditioned regressor (a ``UserWarning``).
 

@@ -1,28 +1,28 @@
-"""Cross-validation of one estimator and torque model over folds of the motion's phase
-(:mod:`._validation` has the module's story and the public functions built on this)."""
+"""The folds of a motion's phase, the splits a validation makes (:class:`Splits`), and the
+validation of one estimator and torque model over them (:func:`cross_validation_of`):
+each split's training samples fitted (on their normal equations for the least-squares
+estimators, :mod:`._compressed`), its test samples predicted. :mod:`._splits` makes the
+splits, :mod:`._validation` has the public functions built on this."""
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from typing import TYPE_CHECKING
 
 import numpy as np
 from jaxtyping import ArrayLike, Float, Int
+from threadpoolctl import threadpool_limits
 
 from ._compressed import subset_problems
 from ._fitting import Estimator, FitProblem, describe
 from ._metrics import Metrics, validation_metrics
 from ._model import TorqueModel
 
-if TYPE_CHECKING:
-    from ._splits import Splits
-
 #: Folds of :func:`~._validation.cross_validate` unless told otherwise.
 DEFAULT_FOLDS = 5
 #: A lag whose normalised autocorrelation reaches this is a repeat of the motion.
 REPEAT_CORRELATION = 0.95
-#: Excess errors below this fraction of the best cross-validated error are ties: a model
+#: Excess errors below this fraction of the best validated error are ties: a model
 #: is not made more complex for less.
 TIE_FRACTION = 0.01
 
@@ -62,6 +62,26 @@ def phase_folds(times: Float[ArrayLike, " T"], q: Float[ArrayLike, "T n"],
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
+class Splits:
+    """Which samples each split fits (``train``) and predicts (``test``): boolean masks
+    over the samples of the recordings, concatenated; ``names`` one per split; ``labels``
+    the fold of each sample where the splits are a partition (else None); ``period_s``
+    the repeat period phase folds follow (None: contiguous, or not phase folds);
+    ``parts`` the kind of validation of each split."""
+
+    train: tuple[np.ndarray, ...]
+    test: tuple[np.ndarray, ...]
+    names: tuple[str, ...]
+    labels: np.ndarray | None = None
+    period_s: float | None = None
+    #: the kind of validation each split came from (one kind but for pooled splits)
+    parts: tuple[str, ...] = ()
+
+    def __len__(self) -> int:
+        return len(self.train)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
 class CrossValidation:
     """Predictions of one identification setting on samples it was not fitted to, split
     by a :class:`~._splits.Validation`, and their errors.
@@ -92,6 +112,15 @@ class CrossValidation:
     model: TorqueModel | None = None
     validation: dict = dataclasses.field(default_factory=lambda: {"kind": "phase folds"})
     split_names: tuple[str, ...] = ()
+    split_parts: tuple[str, ...] = ()
+
+    @property
+    def part_scores(self) -> dict[str, float]:
+        """The mean error of each kind of split (``{"phase folds": ..., "speed splits":
+        ...}`` for pooled validations; one entry otherwise)."""
+        parts = self.split_parts or (self.validation["kind"],) * len(self.fold_scores)
+        return {k: float(np.mean([v for p, v in zip(parts, self.fold_scores) if p == k]))
+                for k in dict.fromkeys(parts)}
 
     @property
     def score(self) -> float:
@@ -112,12 +141,13 @@ class CrossValidation:
                 "standard_error": self.standard_error, "fold_scores": self.fold_scores,
                 "folds": len(self.fold_scores), "period_s": self.period_s,
                 "validation": self.validation, "splits": list(self.split_names),
+                "part_scores": self.part_scores,
                 "n_parameters": self.n_parameters, "settings": self.settings,
                 "metrics": self.metrics.as_dict()}
 
 
 def score_of(metrics: Metrics) -> float:
-    """The cross-validation's measure: NRMS over the limits %, else relative RMS %."""
+    """The validation's measure: NRMS over the limits %, else relative RMS %."""
     if metrics.nrms_limits_percent is not None:
         return metrics.nrms_limits_percent
     return metrics.relative_rms_percent_overall
@@ -152,20 +182,24 @@ def cross_validation_of(estimator: Estimator, rows: SplitRows, validation: dict,
     ``on_fit()`` after each fit."""
     splits, Y, tau, limits = rows.splits, rows.Y, rows.tau, rows.limits
     measured, predicted, scores = [], [], []
-    for problem, test in zip(rows.problems(estimator), splits.test):
-        fit = estimator.fit(problem)
-        measured.append(tau[test])
-        predicted.append(Y[test] @ fit.x)
-        scores.append(score_of(validation_metrics(measured[-1], predicted[-1], limits)))
-        if on_fit is not None:
-            on_fit()
+    # many small factorisations: one BLAS thread each (OpenBLAS's threads made the KUKA
+    # LWR4+'s default identify 1.3x slower on 2 idle cores, 14.1-15.1 s against
+    # 10.5-10.9 s); the user's setting is restored on leaving
+    with threadpool_limits(limits=1, user_api="blas"):
+        for problem, test in zip(rows.problems(estimator), splits.test):
+            fit = estimator.fit(problem)
+            measured.append(tau[test])
+            predicted.append(Y[test] @ fit.x)
+            scores.append(score_of(validation_metrics(measured[-1], predicted[-1], limits)))
+            if on_fit is not None:
+                on_fit()
     settings = {**describe(estimator, rows.model, limits),
                 "sigma": getattr(estimator, "sigma", None)}
     return CrossValidation(
         metrics=validation_metrics(np.concatenate(measured), np.concatenate(predicted), limits),
         fold_scores=np.asarray(scores), period_s=splits.period_s, folds=splits.labels,
         n_parameters=rows.model.dim, settings=settings, estimator=estimator, model=rows.model,
-        validation=validation, split_names=splits.names)
+        validation=validation, split_names=splits.names, split_parts=splits.parts)
 
 
 def not_worse(cv: CrossValidation, best: CrossValidation) -> bool:

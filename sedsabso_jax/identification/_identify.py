@@ -205,7 +205,7 @@ def recordings_of(robot: Robot, data: Data) -> list[Measurements]:
             data = Measurements(times, q, qd, qdd, tau)
         data_arrays(robot, data)
         return [data]
-    found = list(data)  # type: ignore[arg-type]
+    found: list[Measurements] = list(data)  # type: ignore[arg-type]  # is_several
     rates = []
     for k, d in enumerate(found):
         if d.n_joints != robot.n_joints:
@@ -332,13 +332,8 @@ def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
     if not isinstance(estimator, Estimator):
         raise TypeError(f"estimator must be an Estimator (OLS(), WLS(...), L1(), "
                         f"BoxSearch(...), ...), got {estimator!r}")
-    index = None
-    if is_several(data):
-        recordings = recordings_of(robot, data)
-        q, qd, qdd, tau, index = stacked(recordings)
-    else:
-        q, qd, qdd, tau = data_arrays(robot, data)
-    count = 1 if index is None else int(index.max()) + 1
+    several = is_several(data)
+    count = len(data) if several else 1  # type: ignore[arg-type]
     if offset_per_recording and count < 2:
         raise ValueError("offset_per_recording needs several recordings")
     model = torque_model(robot, model, transmission=transmission, base=base,
@@ -351,6 +346,11 @@ def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
     estimator.check(model, limits)
     if model.regrouped:
         warnings.warn(regrouped_message(model), stacklevel=_deprecation.caller_stacklevel())
+    index = None
+    if several:
+        q, qd, qdd, tau, index = stacked(recordings_of(robot, data))
+    else:
+        q, qd, qdd, tau = data_arrays(robot, data)
     t0 = time.perf_counter()
     Y = model.regressor(q, qd, qdd, index if model.recordings > 1 else None)  # (T, n, d)
     out = estimator.fit(FitProblem(model, Y, tau, limits))

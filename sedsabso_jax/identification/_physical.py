@@ -19,7 +19,7 @@ parameters and ``p`` the full parameters (12 per link). It is a convex semidefin
 programme, solved to its global optimum by Clarabel through cvxpy (the data enter only
 through the ``d x d`` triangular factor of :func:`~sedsabso_jax.optim._linear.factorize`).
 ``lambda`` is the user's ``prior_weight`` plus ``prior_strength`` times the data term's
-mean curvature (the scale-free form, chosen by cross-validation in
+mean curvature (the scale-free form, chosen by validation in
 :func:`~._validation.choose_prior_strength`), but at least :data:`RIDGE` times that
 curvature: the data leave some directions of ``p`` free (the non-identifiable ones), and
 along some of them the feasible set is unbounded, so a tiny pull to the prior keeps the
@@ -111,7 +111,7 @@ def fit_physical(model: TorqueModel, factor: Factorization, prior: Float[ArrayLi
     torques); ``prior`` the full a-priori parameters (12 per link). The pull to the prior
     is ``lambda = prior_weight + prior_strength * (the data term's mean curvature)``:
     ``prior_strength`` is scale-free (the same value means the same balance for any
-    weighting, robot or number of samples), which is what cross-validation chooses
+    weighting, robot or number of samples), which is what validation chooses
     (:func:`~._validation.choose_prior_strength`)."""
     import cvxpy as cp
 

@@ -106,6 +106,11 @@ def _cv_error(cv: CrossValidation) -> str:
             f"{what} (`{measure}`)")
 
 
+#: What each kind of split predicts the error of.
+PART_MEANING = {"phase folds": "motions like the fitted one", "speed splits": "faster ones",
+                "recording folds": "another recording", "given folds": "the given folds"}
+
+
 def _described(cv: CrossValidation) -> str:
     """What a validation did, for the report."""
     text = cv.validation.get("description", cv.validation["kind"])
@@ -141,14 +146,11 @@ class IdentificationReport:
     prior_selection: PriorSelection | None = None
     #: how far ``held_out`` goes beyond ``data`` (:func:`~._extrapolation.extrapolation`)
     extrapolation: Extrapolation | None = None
-    #: the chosen setting's second validation (phase folds, or leave one recording out)
-    check: CrossValidation | None = None
 
     @classmethod
     def evaluate(cls, ident: Identification, data: Measurements | Sequence[Measurements],
                  held_out: Measurements | None = None, limits: Limits = None, *,
                  cross_validation: CrossValidation | None = None,
-                 check: CrossValidation | None = None,
                  selection: Selection | None = None,
                  prior_selection: PriorSelection | None = None) -> IdentificationReport:
         """Predict the torques of ``data`` (one recording or several; their own torque
@@ -169,7 +171,7 @@ class IdentificationReport:
                    None if held_out is None else validation_metrics(
                        held_out.tau, val_pred, limits),  # type: ignore[arg-type]
                    (fit_pred, val_pred), cross_validation, selection, prior_selection,
-                   beyond, check)
+                   beyond)
 
     def text(self) -> str:
         """The parameters and per-joint metrics as markdown tables, each with a note that
@@ -205,20 +207,19 @@ class IdentificationReport:
                       f"validated error ({cv.measure}): {cv.score:.4f} +- "
                       f"{cv.standard_error:.4f} (mean and standard error over "
                       f"{len(cv.fold_scores)} splits): the error to expect on new motions"]
-        if self.check is not None:
-            ck = self.check
-            lines += ["", f"second validation ({_described(ck)}): {ck.score:.4f} +- "
-                          f"{ck.standard_error:.4f} ({ck.measure}; the error to expect on "
-                          f"motions like the fitted one, not chosen by)"]
+            if len(cv.part_scores) > 1:
+                lines += ["", "by kind of split: " + "; ".join(
+                    f"{k} {v:.4f} ({PART_MEANING.get(k, k)})"
+                    for k, v in cv.part_scores.items())]
         if self.selection is not None:
-            check = [self.check.validation["kind"] + " [%]"] if self.selection.checks \
-                and self.check is not None else []
-            kind = self.selection.cross_validation.validation["kind"]
-            lines += ["", f"chosen by {kind} (the simplest whose split-by-split excess over "
-                          f"the lowest is within one standard error):", "",
+            sel = self.selection
+            parts = sel.parts if len(sel.parts) > 1 else ()
+            lines += ["", f"chosen by {' and '.join(sel.parts)} (the simplest whose "
+                          f"split-by-split excess over the lowest is within one standard "
+                          f"error):", "",
                       markdown_table(["method", "sigma", "physical", "friction", "parameters",
-                                      f"{kind} [%]", *check, "choice"],
-                                     self.selection.table()),
+                                      "error [%]", *(f"{k} [%]" for k in parts), "choice"],
+                                     sel.table()),
                       "", columns_note(
                           ("method", "the estimator (`identify --method`)"),
                           ("sigma", "what each joint's rows are divided by (`equal`: "
@@ -228,15 +229,14 @@ class IdentificationReport:
                            "(`identify --physical`), friction coefficients >= 0"),
                           ("friction", "the torque model's terms (`identify --friction`)"),
                           ("parameters", "the number of parameters the model identifies"),
-                          (f"{kind} [%]", _cv_error(self.selection.cross_validation)),
-                          *([(check[0], "the same error by the second validation (not "
-                              "chosen by)")] if check else []),
+                          ("error [%]", _cv_error(sel.cross_validation)),
+                          *((f"{k} [%]", f"the mean over the {k} alone") for k in parts),
                           ("choice", "`chosen` (the simplest, fewest parameters then "
                            "physically consistent, whose split-by-split excess over the "
                            "lowest is within one standard error) or `lowest` (the lowest "
                            "error)"))]
         if self.prior_selection is not None:
-            lines += ["", "pull toward the a-priori parameters chosen by cross-validation (the "
+            lines += ["", "pull toward the a-priori parameters chosen by validation (the "
                           "strongest within one standard error of the lowest):", "",
                       markdown_table(["prior strength", "CV error [%]", "choice"],
                                      self.prior_selection.table()),
@@ -276,7 +276,6 @@ class IdentificationReport:
                 "selection": None if self.selection is None else self.selection.as_dict(),
                 "prior_strength": None if self.prior_selection is None
                 else self.prior_selection.as_dict()},
-            "check": None if self.check is None else self.check.as_dict(),
             "settings": {**settings, **ident.settings},
             "extrapolation": None if self.extrapolation is None
             else self.extrapolation.as_dict(),
@@ -291,8 +290,10 @@ class IdentificationReport:
             sets.append(("torques_validation.png", self.held_out, self.predicted[1],
                          "held-out data"))
         # pred is None only for held-out data, which is then not in sets
+        method = ident.method + (", physically consistent" if ident.full_params is not None
+                                 else "")
         return {name: figure_torques(d.times, d.tau, pred,  # type: ignore[arg-type]
-                                     robot.joint_names, f"{robot.name}, {ident.method}: {label}")
+                                     robot.joint_names, f"{robot.name}, {method}: {label}")
                 for name, d, pred, label in sets}
 
     def write(self, settings: dict, out_dir: PathLike | None = None,

@@ -12,10 +12,14 @@ the splits is the validation's score.
 - :class:`SpeedSplits`: for each joint, fit the samples where it moves slower than
   ``fit_below`` of its peak speed and predict those where it moves faster than
   ``predict_above``: the model must extrapolate in speed, as it must on a new motion that
-  is faster than the one fitted (friction at speeds never fitted). The default of
-  ``sedsabso-jax identify``.
+  is faster than the one fitted (friction at speeds never fitted).
 - :class:`RecordingFolds`: leave one recording out, for several recordings.
 - :class:`GivenFolds`: fold labels of the user's, one per sample.
+- :class:`Pooled`: the splits of several of these together. ``sedsabso-jax identify``
+  chooses by ``Pooled((PhaseFolds(), SpeedSplits()))`` (leave one recording out instead
+  of the phase folds for several recordings): on the real KUKA LWR4+ it was the only
+  choice that held both on stretches of the motion and on its fastest samples
+  (``benchmarks.real_robots``).
 """
 
 from __future__ import annotations
@@ -29,7 +33,7 @@ import numpy as np
 from jaxtyping import ArrayLike, Int
 
 from ..measurements._container import Measurements
-from ._folds import DEFAULT_FOLDS, phase_folds
+from ._folds import DEFAULT_FOLDS, Splits, phase_folds
 
 #: :class:`SpeedSplits`' default thresholds, as fractions of each joint's peak speed
 #: (its 99.5 % quantile of ``|qd|``).
@@ -37,23 +41,6 @@ FIT_BELOW, PREDICT_ABOVE = 0.7, 0.8
 #: The quantile of ``|qd|`` that :class:`SpeedSplits` calls a joint's peak speed (robust
 #: to a spike of the derived velocity).
 PEAK_QUANTILE = 0.995
-
-
-@dataclasses.dataclass(frozen=True, eq=False)
-class Splits:
-    """Which samples each split fits (``train``) and predicts (``test``): boolean masks
-    over the samples of the recordings, concatenated; ``names`` one per split; ``labels``
-    the fold of each sample where the splits are a partition (else None); ``period_s``
-    the repeat period phase folds follow (None: contiguous, or not phase folds)."""
-
-    train: tuple[np.ndarray, ...]
-    test: tuple[np.ndarray, ...]
-    names: tuple[str, ...]
-    labels: np.ndarray | None = None
-    period_s: float | None = None
-
-    def __len__(self) -> int:
-        return len(self.train)
 
 
 class Validation(abc.ABC):
@@ -203,3 +190,38 @@ class RecordingFolds(Validation):
 
     def describe(self) -> str:
         return "each recording predicted by a fit to the others"
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Pooled(Validation):
+    """The splits of several validations together: a model is scored on all of them (the
+    mean over every split), as new motions are partly like the fitted one (phase folds)
+    and partly faster (speed splits). The default of ``sedsabso-jax identify``:
+    ``Pooled((PhaseFolds(), SpeedSplits()))``, with :class:`RecordingFolds` for the phase
+    folds where there are several recordings."""
+
+    validations: tuple[Validation, ...] = ()
+    kind: ClassVar[str] = "pooled"
+
+    def __post_init__(self):
+        found = tuple(self.validations)
+        if len(found) < 2 or not all(isinstance(v, Validation) for v in found):
+            raise ValueError(f"Pooled needs at least two validations (PhaseFolds(), "
+                             f"SpeedSplits(), ...), got {self.validations!r}")
+        object.__setattr__(self, "validations", found)
+
+    def splits(self, recordings: Sequence[Measurements]) -> Splits:
+        parts = [v.splits(recordings) for v in self.validations]
+        periods = {p.period_s for p in parts if p.period_s is not None}
+        return Splits(tuple(m for p in parts for m in p.train),
+                      tuple(m for p in parts for m in p.test),
+                      tuple(n for p in parts for n in p.names),
+                      period_s=periods.pop() if len(periods) == 1 else None,
+                      parts=tuple(v.kind for v, p in zip(self.validations, parts)
+                                  for _ in range(len(p))))
+
+    def describe(self) -> str:
+        return "; and ".join(v.describe() for v in self.validations)
+
+    def settings(self) -> dict:
+        return {"kind": self.kind, "validations": [v.settings() for v in self.validations]}

@@ -1,30 +1,39 @@
-"""Judging an identification on motion it was not fitted to: cross-validation over
-non-repeating stretches of a recording, and the choice of a model by it.
+"""Judging an identification on samples it was not fitted to, and choosing a model by it.
 
-A recording of an excitation trajectory usually repeats its motion (the KUKA LWR4+ runs hold
-two periods of one trajectory, the Panda's one and a half): a contiguous block held out of
-one period is fitted in the other, so contiguous-block cross-validation measures
-repeatability. Here the folds are stretches of the trajectory's PHASE (:func:`phase_folds`):
-the recording's repeat period is found from the positions' autocorrelation, and fold ``k``
-holds every sample whose phase lies in ``[k/K, (k+1)/K)`` of the period, in every period.
-A recording that does not repeat has phase = time, and the folds are contiguous blocks.
+A :class:`~._splits.Validation` cuts the data into splits, each a set of samples to fit
+and a set to predict. Two kinds answer two questions:
 
-:func:`cross_validate` fits on ``K - 1`` folds and predicts the held-out one, ``K`` times;
-the out-of-fold predictions are compared with the measured torques (NRMS over the torque
-limits where they are known, else the relative RMS). :func:`select_model` cross-validates a
-grid of torque models and estimators and keeps the simplest that is not worse than the
+- **phase folds** (:class:`~._splits.PhaseFolds`): a recording of an excitation trajectory
+  usually repeats its motion (the KUKA LWR4+ runs hold two periods of one trajectory, the
+  Panda's one and a half), so a contiguous block held out of one period is fitted in the
+  other and contiguous-block cross-validation measures repeatability. Phase folds are
+  stretches of the trajectory's PHASE (:func:`phase_folds`: the repeat period is found
+  from the positions' autocorrelation, fold ``k`` holds every sample whose phase lies in
+  ``[k/K, (k+1)/K)``; a recording that does not repeat has phase = time). They predict the
+  error on motions like the fitted one: the model only ever interpolates.
+- **speed splits** (:class:`~._splits.SpeedSplits`, the default of
+  :func:`~._auto.select_and_identify`): each joint's fast samples predicted by a fit to its
+  slow ones, as a new, faster motion asks the model to extrapolate (friction at speeds
+  never fitted). Leave one recording out (:class:`~._splits.RecordingFolds`) where there
+  are several.
+
+:func:`cross_validate` fits and predicts every split; the predictions are compared with
+the measured torques (NRMS over the torque limits where they are known, else the relative
+RMS), one score per split, their mean the validated error. :func:`select_model` validates
+a grid of torque models and estimators and keeps the simplest that is not worse than the
 best by more than one standard error (the one-standard-error rule: Hastie, Tibshirani &
 Friedman, *The Elements of Statistical Learning*, 2009, Sec. 7.10), with the standard
-error taken of the PAIRED fold-by-fold differences to the best: the folds differ in
+error taken of the PAIRED split-by-split differences to the best: the splits differ in
 difficulty far more than the models do, and that common part cancels in the differences
 (unpaired, the rule once kept a model without the torque offset whose error was higher on
 every fold of the KUKA LWR4+ data). Excesses below 1 % of the best error
 (:data:`TIE_FRACTION`) count as ties, so a model is not made more complex for a gain no
-one could use. Nothing here looks at held-out files: they are for judging the choice,
-never for making it.
+one could use; simpler is fewer parameters, then physically consistent, then the earlier
+estimator. Nothing here looks at held-out files: they are for judging the choice, never
+for making it.
 
-Each takes the data as a :class:`~sedsabso_jax.Measurements` or ``(times, q, qd, qdd,
-tau)``, estimator objects (:mod:`._estimators`) and torque models (a
+Each takes the data as a :class:`~sedsabso_jax.Measurements`, several of them, or
+``(times, q, qd, qdd, tau)``, estimator objects (:mod:`._estimators`) and torque models (a
 :class:`~._model.TorqueModel` or friction terms). 0.2's forms ``(robot, times, q, qd, qdd,
 tau, **identify_settings)`` keep working through 0.3.x with a ``DeprecationWarning``.
 """
@@ -195,8 +204,8 @@ def _check_estimator(estimator):
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Selection:
-    """What :func:`select_model` returns: every candidate's cross-validation (in the order
-    tried) as ``(settings, cross-validation)`` pairs, where ``settings`` is ``{"method",
+    """What :func:`select_model` returns: every candidate's validation (in the order
+    tried) as ``(settings, validation)`` pairs, where ``settings`` is ``{"method",
     "sigma", "friction"}``; the chosen and the lowest candidate's settings; ``options``
     the ``(estimator, model)`` of each candidate. :attr:`estimator` and :attr:`model` are
     the chosen ones: ``identify(robot, data, sel.estimator, sel.model)`` fits it."""
@@ -223,26 +232,22 @@ class Selection:
         return self.candidates[self._index(self.chosen)][1]
 
     @property
-    def check(self) -> CrossValidation | None:
-        """The chosen candidate's second validation (None when not run)."""
-        return self.checks[self._index(self.chosen)] if self.checks else None
-
-    #: each candidate's validation by a second :class:`~._splits.Validation` (the
-    #: report's other score; empty when not run), in the order of :attr:`candidates`
-    checks: tuple[CrossValidation, ...] = ()
+    def parts(self) -> tuple[str, ...]:
+        """The kinds of split the validation pools (one for a validation of one kind)."""
+        return tuple(self.cross_validation.part_scores)
 
     def table(self) -> list[list[str]]:
-        """Rows ``[method, sigma, physical, friction, parameters, error +- SE, (the second
-        validation's error,) chosen]``."""
+        """Rows ``[method, sigma, physical, friction, parameters, error +- SE, (each
+        part's mean error of pooled splits,) chosen]``."""
         rows = []
-        for i, (settings, cv) in enumerate(self.candidates):
+        parts = self.parts if len(self.parts) > 1 else ()
+        for settings, cv in self.candidates:
             mark = "chosen" if settings is self.chosen else (
                 "lowest" if settings is self.best else "")
-            check = [f"{self.checks[i].score:.4f}"] if self.checks else []
             rows.append([settings["method"], str(settings.get("sigma") or "equal"),
                          "yes" if settings.get("physical") else "no", settings["friction"],
                          str(cv.n_parameters), f"{cv.score:.4f} +- {cv.standard_error:.4f}",
-                         *check, mark])
+                         *(f"{cv.part_scores[k]:.4f}" for k in parts), mark])
         return rows
 
     def as_dict(self) -> dict:
@@ -251,9 +256,7 @@ class Selection:
                         "lowest validated error is at most one standard error (or 1 % of "
                         "the lowest)",
                 "chosen": self.chosen, "lowest": self.best,
-                "candidates": [{"settings": s, **cv.as_dict(),
-                                **({"check": self.checks[i].as_dict()} if self.checks else {})}
-                               for i, (s, cv) in enumerate(self.candidates)]}
+                "candidates": [{"settings": s, **cv.as_dict()} for s, cv in self.candidates]}
 
 
 def select_model(robot: Robot, data: Data, *old_args: Any,
@@ -263,7 +266,7 @@ def select_model(robot: Robot, data: Data, *old_args: Any,
                  validation: Validation | None = None, limits: Limits = None,
                  transmission: TransmissionLike = None, base: BaseParameters | None = None,
                  smooth_velocity: float = SMOOTH_VELOCITY, offset_per_recording: bool = False,
-                 check: Validation | None = None, progress: ProgressCallback | None = None,
+                 progress: ProgressCallback | None = None,
                  weightings: Iterable[tuple[str, Sigma]] | None = None,
                  **old_keywords: Any) -> Selection:
     """Choose the torque model and the estimator by validation (module docstring).
@@ -274,7 +277,8 @@ def select_model(robot: Robot, data: Data, *old_args: Any,
     friction strings, or TorqueModels) are the grid, simplest first; a ``transmission``
     with a coupled motor adds the ``coupling`` term to every friction string. Every
     candidate is scored by ``validation`` (default: ``folds`` phase folds, as in
-    :func:`cross_validate`), and by ``check`` too where given (reported, not chosen by).
+    :func:`cross_validate`; a :class:`~._splits.Pooled` validation's parts are scored
+    from the same fits: :attr:`~._folds.CrossValidation.part_scores`).
     ``progress(label, done, total)`` is called after each fit (``total``: candidates x
     splits).
     0.2's ``weightings`` ((method, sigma) pairs) and keyword settings (``physical``, ...)
@@ -300,11 +304,10 @@ def select_model(robot: Robot, data: Data, *old_args: Any,
     K: Any = getattr(transmission, "matrix", transmission)
     coupled = K is not None and bool(coupled_motors(K))
     prepared = Prepared.of(robot, data, validation_of(validation, folds))
-    checked = None if check is None else Prepared.of(robot, data, check)
     recordings = _offsets(offset_per_recording, prepared)
     if base is None:  # computed once for every candidate
         base = base_parameters(robot)
-    models = []
+    models: list[TorqueModel] = []
     for friction in frictions:
         if isinstance(friction, str) and coupled and "coupling" not in friction:
             friction = friction + "+coupling"
@@ -313,12 +316,11 @@ def select_model(robot: Robot, data: Data, *old_args: Any,
             if isinstance(friction, str) else torque_model(robot, friction)
         if all(m.friction != model.friction for m in models):  # "+offset" may repeat one
             models.append(model)
-    per_fit = len(prepared.splits) + (0 if checked is None else len(checked.splits))
+    per_fit = len(prepared.splits)
     fits = _Fits(progress, len(models) * len(estimators) * per_fit)
-    tried, options, checks = [], [], []
+    tried, options = [], []
     for model in models:
         rows = prepared.rows(model, limits)  # one regressor per torque model
-        check_rows = None if checked is None else checked.rows(model, limits)
         for estimator in estimators:
             estimator.check(model, limits)
             settings = {"method": estimator.name, "sigma": getattr(estimator, "sigma", None),
@@ -326,8 +328,6 @@ def select_model(robot: Robot, data: Data, *old_args: Any,
             on_fit = fits.after(f"{estimator.name}{' physical' * estimator.physical}, "
                                 f"{model.friction}")
             tried.append((settings, prepared.validate(estimator, rows, on_fit)))
-            if checked is not None and check_rows is not None:
-                checks.append(checked.validate(estimator, check_rows, on_fit))
             options.append((estimator, model))
     best_settings, best = min(tried, key=lambda c: c[1].score)
     # simplest: fewest parameters, then physically consistent, then the earlier estimator
@@ -335,12 +335,12 @@ def select_model(robot: Robot, data: Data, *old_args: Any,
                                                      not options[i][0].physical, i))
     chosen = next(tried[i][0] for i in order if not_worse(tried[i][1], best))
     return Selection(candidates=tuple(tried), chosen=chosen, best=best_settings,
-                     options=tuple(options), checks=tuple(checks))
+                     options=tuple(options))
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class PriorSelection:
-    """What :func:`choose_prior_strength` returns: each strength's cross-validation (in
+    """What :func:`choose_prior_strength` returns: each strength's validation (in
     the order tried), the chosen and the lowest strength, and the estimator of each
     (``estimators``); :attr:`estimator` is the chosen one."""
 
@@ -355,7 +355,7 @@ class PriorSelection:
 
     @property
     def cross_validation(self) -> CrossValidation:
-        """The chosen strength's cross-validation."""
+        """The chosen strength's validation."""
         return dict(self.candidates)[self.chosen]
 
     def table(self) -> list[list[str]]:
@@ -366,7 +366,7 @@ class PriorSelection:
 
     def as_dict(self) -> dict:
         return {"rule": "strongest pull to the prior whose fold-by-fold excess over the "
-                        "lowest cross-validated error is at most one standard error (or 1 % "
+                        "lowest validated error is at most one standard error (or 1 % "
                         "of the lowest)",
                 "chosen": self.chosen, "lowest": self.best,
                 "candidates": [{"prior_strength": s, **cv.as_dict()}
