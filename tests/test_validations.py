@@ -88,6 +88,19 @@ def test_pooled_splits_are_both_validations_and_score_each_part():
         sj.Pooled((sj.PhaseFolds(),))
 
 
+def test_the_rule_prefers_the_physically_consistent_fit_within_a_standard_error():
+    """RS010N data from its own (physical) parameters with 5 % torque noise: the
+    unconstrained fit scores lowest by a hair, the physically consistent one, as simple
+    and within one standard error, is chosen."""
+    data = _run(3, noise=0.05)
+    sel = sj.select_model(sj.robots.rs010n(), data,
+                          estimators=(sj.OLS(), sj.PhysicallyConsistent()),
+                          frictions="viscous-coulomb",
+                          validation=sj.Pooled((sj.PhaseFolds(), sj.SpeedSplits())))
+    assert sel.best["physical"] is False and sel.chosen["physical"] is True
+    assert isinstance(sel.estimator, sj.PhysicallyConsistent)
+
+
 # ---------------------------------------------------------- fits on the normal equations
 @pytest.mark.parametrize("sigma", [None, "residual", "limits"])
 def test_fits_on_normal_equations_are_least_squares_on_the_rows(sigma):
@@ -189,14 +202,17 @@ def test_command_fits_several_files_and_leaves_one_out(tmp_path, capsys):
     assert "by kind of split: recording folds " in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("rate, extra, message", [
-    (50.0, [], "different sampling rates"),
-    (100.0, ["--offset-per-recording"], "needs several --data files"),
-    (100.0, ["--validation", "recordings"], "needs several --data files"),
+@pytest.mark.parametrize("rate, joints, extra, message", [
+    (50.0, 3, [], "different sampling rates"),
+    (100.0, 2, [], "b.npz: field 'positions': expected 3 joints"),
+    (100.0, 3, ["--offset-per-recording"], "needs several --data files"),
+    (100.0, 3, ["--validation", "recordings"], "needs several --data files"),
 ])
-def test_bad_several_files(rate, extra, message, tmp_path, capsys):
+def test_bad_several_files(rate, joints, extra, message, tmp_path, capsys):
     a = _run(1).save(tmp_path / "a.npz")
-    b = _run(2, rate=rate).save(tmp_path / "b.npz")
+    d = _run(2, rate=rate)
+    b = sj.Measurements(d.times, d.q[:, :joints], d.qd[:, :joints], d.qdd[:, :joints],
+                        d.tau[:, :joints]).save(tmp_path / "b.npz")
     files = [str(a), str(b)] if not extra else [str(a)]
     out = tmp_path / "out"
     assert _status(["identify", "--robot", "rs010n", "--data", *files, *extra,

@@ -152,6 +152,12 @@ BUGS = [
     ("identification/_physical.py", "        constraints.append(extras[list(nonneg)] >= 0)",
      "        pass", "quadratic friction may turn negative in a physical fit", VALIDATIONS,
      None),
+    ("identification/_validation.py", "not options[i][0].physical, i))",
+     "options[i][0].physical, i))", "the rule prefers the unconstrained fit at equal "
+     "parameters", VALIDATIONS, None),
+    ("identification/_auto.py", "    return Pooled((interpolation, SpeedSplits()))",
+     "    return SpeedSplits()", "the default chooses by the speed splits alone",
+     ["tests/test_identify_cli.py"], None),
     ("identification/_identify.py", "if max(rates) > (1 + RATE_TOLERANCE) * min(rates):",
      "if max(rates) > 2 * (1 + RATE_TOLERANCE) * min(rates):",
      "recordings at twice the rate of another accepted", VALIDATIONS, None),

@@ -17,7 +17,8 @@ torque offsets (free), armature and motor friction (``>= 0``)::
 with ``W, b`` the (weighted) stacked regressor and torques, ``K`` the map from full to base
 parameters and ``p`` the full parameters (12 per link). It is a convex semidefinite
 programme, solved to its global optimum by Clarabel through cvxpy (the data enter only
-through the ``d x d`` triangular factor of :func:`~sedsabso_jax.optim._linear.factorize`).
+through the ``d x d`` triangular factor of :func:`~sedsabso_jax.optim._linear.factorize`;
+the programme is built once per model shape, with the data as parameters).
 ``lambda`` is the user's ``prior_weight`` plus ``prior_strength`` times the data term's
 mean curvature (the scale-free form, chosen by validation in
 :func:`~._validation.choose_prior_strength`), but at least :data:`RIDGE` times that
@@ -71,8 +72,11 @@ def _inertial_params(J):
 def _programme(n_joints: int, dim: int, n_extra: int, nonneg: tuple[int, ...]):
     """The semidefinite programme of :func:`fit_physical` for one shape of model, with the
     data, the prior and its weight as cvxpy parameters (a DPP problem): cvxpy then
-    canonicalises it once, and later solves only put in new numbers (about 5x faster on the
-    KUKA LWR4+'s 64-column model, where the canonicalisation took 85 % of a solve).
+    canonicalises it once, and later solves only put in new numbers (4-7x faster on the
+    KUKA LWR4+'s 64-column model, 0.04 s against 0.15-0.30 s a solve, where the
+    canonicalisation took 90 % of the time). The cached problem's parameters are shared:
+    fits of one model shape from several threads at once would race (one process, one
+    fit at a time, as every caller here does).
     Returns ``(problem, parameters dict, full parameters p, extras or None)``."""
     import cvxpy as cp
 
