@@ -51,6 +51,7 @@ from jaxtyping import ArrayLike, Int
 from .. import _deprecation
 from ..dynamics._base_parameters import BaseParameters, base_parameters
 from ..dynamics._robot import Robot
+from ..measurements._container import Measurements
 from ..measurements._transmission import TransmissionLike, coupled_motors
 from ._estimators import OLS, WLS, PhysicallyConsistent
 from ._fitting import Estimator, Limits, ProgressCallback, Sigma, per_joint
@@ -134,7 +135,7 @@ def validation_of(validation: Validation | None, folds: int | Int[ArrayLike, " T
 class Prepared:
     """The recordings of ``data``, checked and stacked, and a validation's splits."""
 
-    recordings: list
+    recordings: list[Measurements]
     arrays: tuple[np.ndarray, ...]  # q, qd, qdd, tau, recording index
     splits: Splits
     validation: Validation
@@ -316,8 +317,7 @@ def select_model(robot: Robot, data: Data, *old_args: Any,
             if isinstance(friction, str) else torque_model(robot, friction)
         if all(m.friction != model.friction for m in models):  # "+offset" may repeat one
             models.append(model)
-    per_fit = len(prepared.splits)
-    fits = _Fits(progress, len(models) * len(estimators) * per_fit)
+    fits = _Fits(progress, len(models) * len(estimators) * len(prepared.splits))
     tried, options = [], []
     for model in models:
         rows = prepared.rows(model, limits)  # one regressor per torque model
