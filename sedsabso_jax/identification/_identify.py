@@ -199,12 +199,12 @@ def recordings_of(robot: Robot, data: Data) -> list[Measurements]:
     several, or the arrays ``(times, q, qd, qdd, tau)``. Several must have the robot's
     joints and one sampling rate (within :data:`RATE_TOLERANCE`); a ValueError names the
     recording that does not."""
-    if not is_several(data):
-        if not isinstance(data, Measurements):
-            times, q, qd, qdd, tau = data_arrays(robot, data, times=True)
-            data = Measurements(times, q, qd, qdd, tau)
-        data_arrays(robot, data)
+    if isinstance(data, Measurements):
+        data_arrays(robot, data)  # the robot's joints
         return [data]
+    if not is_several(data):
+        times, q, qd, qdd, tau = data_arrays(robot, data, times=True)
+        return [Measurements(times, q, qd, qdd, tau)]
     found: list[Measurements] = list(data)  # type: ignore[arg-type]  # is_several
     rates = []
     for k, d in enumerate(found):
