@@ -1,0 +1,126 @@
+"""Snapshot the command's outputs, to check that a change of structure changes no result.
+
+    python tools/snapshot.py run OUT [--only identify|reproduce|compare]
+    python tools/snapshot.py diff OLD NEW
+
+``run`` writes what ``identify`` (three shipped robots, several estimators and models),
+``reproduce`` and ``compare --runs 5`` write into OUT; ``diff`` compares two snapshots
+file by file, byte for byte, except the timings: JSON keys that hold seconds
+(``seconds``, ``*_s``, ``time*``) are dropped, and lines of text that print seconds are
+masked.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+KUKA = ROOT / "sedsabso_jax" / "data" / "kuka_lwr4"
+
+
+def identify_runs(tmp: Path) -> dict[str, list[str]]:
+    sys.path.insert(0, str(ROOT))
+    from data import real_robots
+
+    m1, m2 = str(KUKA / "measurements_1.npz"), str(KUKA / "measurements_2.npz")
+    panda = str(real_robots.panda_npz(tmp / "panda.npz"))
+    tx40 = str(real_robots.tx40_npz(tmp / "tx40.npz"))
+    kuka = ["--robot", "kuka_lwr4", "--data", m1, "--validate", m2]
+    return {
+        "kuka-default": kuka,
+        "kuka-physical-cv": [*kuka, "--physical", "--prior-strength", "cv"],
+        "kuka-wls-smooth": [*kuka, "--method", "WLS", "--friction",
+                            "viscous-coulomb+offset+quadratic+smooth", "--no-physical"],
+        "kuka-l1": [*kuka, "--method", "L1", "--weights", "equal",
+                    "--friction", "viscous-coulomb+offset"],
+        "kuka-sedsabso": [*kuka, "--method", "SEDSABSO", "--runs", "2", "--iterations", "60",
+                          "--friction", "viscous-coulomb"],
+        "kuka-two-runs": ["--robot", "kuka_lwr4", "--data", m1, m2, "--offset-per-recording"],
+        "panda-default": ["--robot", "franka_panda", "--data", panda, "--resample-hz", "1000"],
+        "tx40-default": [*real_robots.TX40_FLAGS, "--data", tx40, "--downsample", "5"],
+    }
+
+
+def run(out: Path, only: str | None) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    exe = str(Path(sys.executable).parent / "sedsabso-jax")
+    jobs: list[tuple[str, list[str]]] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        if only in (None, "identify"):
+            for name, argv in identify_runs(Path(tmp)).items():
+                jobs.append((name, ["identify", *argv, "--out", str(out / name),
+                                    "--json", str(out / f"{name}.json")]))
+        if only in (None, "reproduce"):
+            jobs.append(("reproduce", ["reproduce", "--out", str(out / "reproduce"),
+                                       "--json", str(out / "reproduce.json")]))
+        if only in (None, "compare"):
+            jobs.append(("compare", ["compare", "--runs", "5", "--dimensions", "5,10",
+                                     "--out", str(out / "compare")]))
+        for name, argv in jobs:
+            p = subprocess.run([exe, *argv], capture_output=True, text=True)
+            (out / f"{name}.stdout").write_text(p.stdout)
+            (out / f"{name}.stderr").write_text(p.stderr)
+            print(f"{name}: exit {p.returncode}", flush=True)
+
+
+TIMING_KEY = re.compile(r"(seconds|_s|^time.*|^elapsed.*|^version)$")
+TIMING_TEXT = re.compile(r"\d+(\.\d+)?\s*(s|ms|min)\b|\d+(\.\d+)?s\b|sedsabso-jax \d+\.\d+")
+
+
+def _strip(obj):
+    if isinstance(obj, dict):
+        return {k: _strip(v) for k, v in obj.items() if not TIMING_KEY.search(k)}
+    if isinstance(obj, list):
+        return [_strip(v) for v in obj]
+    return obj
+
+
+def diff(old: Path, new: Path) -> int:
+    bad = 0
+    files = sorted({p.relative_to(old) for p in old.rglob("*") if p.is_file()}
+                   | {p.relative_to(new) for p in new.rglob("*") if p.is_file()})
+    for rel in files:
+        a, b = old / rel, new / rel
+        if not (a.exists() and b.exists()):
+            print(f"only in {'old' if a.exists() else 'new'}: {rel}")
+            bad += 1
+            continue
+        if rel.suffix == ".png" or a.read_bytes() == b.read_bytes():
+            continue
+        if rel.suffix == ".json":
+            same = _strip(json.loads(a.read_text())) == _strip(json.loads(b.read_text()))
+        else:
+            ta = [TIMING_TEXT.sub("#", line) for line in a.read_text().splitlines()]
+            tb = [TIMING_TEXT.sub("#", line) for line in b.read_text().splitlines()]
+            same = ta == tb
+        if not same:
+            print(f"differs: {rel}")
+            bad += 1
+    print(f"{len(files)} files, {bad} differ (timings masked; figures not compared)")
+    return 1 if bad else 0
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sub = p.add_subparsers(dest="what", required=True)
+    r = sub.add_parser("run")
+    r.add_argument("out", type=Path)
+    r.add_argument("--only", choices=("identify", "reproduce", "compare"))
+    d = sub.add_parser("diff")
+    d.add_argument("old", type=Path)
+    d.add_argument("new", type=Path)
+    a = p.parse_args()
+    if a.what == "run":
+        run(a.out, a.only)
+        return 0
+    return diff(a.old, a.new)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
