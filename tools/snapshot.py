@@ -17,7 +17,6 @@ import json
 import re
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -50,23 +49,24 @@ def identify_runs(tmp: Path) -> dict[str, list[str]]:
 def run(out: Path, only: str | None) -> None:
     out.mkdir(parents=True, exist_ok=True)
     exe = str(Path(sys.executable).parent / "sedsabso-jax")
+    data = out / "_data"  # converted recordings, under OUT so that paths compare
+    data.mkdir(exist_ok=True)
     jobs: list[tuple[str, list[str]]] = []
-    with tempfile.TemporaryDirectory() as tmp:
-        if only in (None, "identify"):
-            for name, argv in identify_runs(Path(tmp)).items():
-                jobs.append((name, ["identify", *argv, "--out", str(out / name),
-                                    "--json", str(out / f"{name}.json")]))
-        if only in (None, "reproduce"):
-            jobs.append(("reproduce", ["reproduce", "--out", str(out / "reproduce"),
-                                       "--json", str(out / "reproduce.json")]))
-        if only in (None, "compare"):
-            jobs.append(("compare", ["compare", "--runs", "5", "--dimensions", "5,10",
-                                     "--out", str(out / "compare")]))
-        for name, argv in jobs:
-            p = subprocess.run([exe, *argv], capture_output=True, text=True)
-            (out / f"{name}.stdout").write_text(p.stdout)
-            (out / f"{name}.stderr").write_text(p.stderr)
-            print(f"{name}: exit {p.returncode}", flush=True)
+    if only in (None, "identify"):
+        for name, argv in identify_runs(data).items():
+            jobs.append((name, ["identify", *argv, "--out", str(out / name),
+                                "--json", str(out / f"{name}.json")]))
+    if only in (None, "reproduce"):
+        jobs.append(("reproduce", ["reproduce", "--out", str(out / "reproduce"),
+                                   "--json", str(out / "reproduce.json")]))
+    if only in (None, "compare"):
+        jobs.append(("compare", ["compare", "--runs", "5", "--dimensions", "5,10",
+                                 "--out", str(out / "compare")]))
+    for name, argv in jobs:
+        p = subprocess.run([exe, *argv], capture_output=True, text=True)
+        (out / f"{name}.stdout").write_text(p.stdout)
+        (out / f"{name}.stderr").write_text(p.stderr)
+        print(f"{name}: exit {p.returncode}", flush=True)
 
 
 TIMING_KEY = re.compile(r"(seconds|_s|^time.*|^elapsed.*|^version)$")
@@ -91,13 +91,15 @@ def diff(old: Path, new: Path) -> int:
             print(f"only in {'old' if a.exists() else 'new'}: {rel}")
             bad += 1
             continue
-        if rel.suffix == ".png" or a.read_bytes() == b.read_bytes():
+        if rel.suffix in (".png", ".npz") or a.read_bytes() == b.read_bytes():
             continue
+        text_a, text_b = (p.read_text().replace(str(root), "OUT")
+                          for p, root in ((a, old), (b, new)))
         if rel.suffix == ".json":
-            same = _strip(json.loads(a.read_text())) == _strip(json.loads(b.read_text()))
+            same = _strip(json.loads(text_a)) == _strip(json.loads(text_b))
         else:
-            ta = [TIMING_TEXT.sub("#", line) for line in a.read_text().splitlines()]
-            tb = [TIMING_TEXT.sub("#", line) for line in b.read_text().splitlines()]
+            ta = [TIMING_TEXT.sub("#", line) for line in text_a.splitlines()]
+            tb = [TIMING_TEXT.sub("#", line) for line in text_b.splitlines()]
             same = ta == tb
         if not same:
             print(f"differs: {rel}")
