@@ -26,7 +26,6 @@ import time
 import warnings
 from importlib import resources
 
-import equinox as eqx
 import jax
 import numpy as np
 
@@ -65,15 +64,16 @@ def configurations(swarms: bool, runs: int):
              sj.PhysicallyConsistent(sj.OLS(), prior_weight=1.0)),
         ]
     if swarms:
-        slow = lambda s: eqx.tree_at(lambda z: z.vmax_fraction, s, 0.1)  # noqa: E731
         for friction, weights in (("viscous-coulomb", None),
                                   ("viscous-coulomb+offset", "limits")):
             for name in ("SEDSABSO", "BSO", "LDWPSO"):
                 rows.append((f"{name} (paper)", friction,
                              sj.Estimator.named(name, sigma=weights, runs=runs, **BOX)))
-        for name, cls in (("SEDSABSO", sj.SEDSABSO), ("LDWPSO", sj.LDWPSO)):
+        slow = (("SEDSABSO", sj.SEDSABSO(beetle=sj.optim.BeetleStep(vmax_fraction=0.1))),
+                ("LDWPSO", sj.LDWPSO(vmax_fraction=0.1)))
+        for name, solver in slow:
             rows.append((f"{name}, Vmax = 0.1 (ub - lb)", "viscous-coulomb+offset",
-                         sj.BoxSearch(slow(cls.paper()), sigma="limits", runs=runs, **BOX)))
+                         sj.BoxSearch(solver, sigma="limits", runs=runs, **BOX)))
     return rows
 
 

@@ -41,6 +41,7 @@ from benchmarks import peers
 from benchmarks.device import describe, device_info
 from benchmarks.problems import rs010n_problem
 from sedsabso_jax import baselines
+from sedsabso_jax.optim import BeetleStep
 
 
 def batch_label() -> str:
@@ -203,12 +204,14 @@ def main():
         for name, solver in paper.items():
             rows.append(swarm_row(name, solver, prob, lo, hi, true, iterations, dtype))
     if not args.quick:
-        rows.append(swarm_row("BSO literal sign", sj.BSO(literal_sign=True), prob, lo, hi,
-                              true, iterations, jnp.float64))
-        for name, solver in (("SEDSABSO Vmax 0.1", sj.SEDSABSO(vmax_fraction=0.1)),
-                             ("SEDSABSO Vmax 0.05", sj.SEDSABSO(vmax_fraction=0.05)),
-                             ("BSO Vmax 0.1", sj.BSO(vmax_fraction=0.1)),
-                             ("LDWPSO Vmax 0.1", sj.LDWPSO(vmax_fraction=0.1))):
+        literal = sj.BSO(beetle=BeetleStep(literal_sign=True))
+        rows.append(swarm_row("BSO literal sign", literal, prob, lo, hi, true, iterations,
+                              jnp.float64))
+        for name, solver in (
+                ("SEDSABSO Vmax 0.1", sj.SEDSABSO(beetle=BeetleStep(vmax_fraction=0.1))),
+                ("SEDSABSO Vmax 0.05", sj.SEDSABSO(beetle=BeetleStep(vmax_fraction=0.05))),
+                ("BSO Vmax 0.1", sj.BSO(beetle=BeetleStep(vmax_fraction=0.1))),
+                ("LDWPSO Vmax 0.1", sj.LDWPSO(vmax_fraction=0.1))):
             rows.append(swarm_row(name, solver, prob, lo, hi, true, iterations, jnp.float64))
     ratios = [paired_ratio(prob, lo, hi, iterations, dtype) for dtype in dtypes]
     speed = speed_vs_evosax(prob, lo, hi, iterations, dtypes, args.ratio_seeds)

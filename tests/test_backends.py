@@ -18,7 +18,7 @@ import pytest
 import sedsabso_jax as sj
 from sedsabso_jax.optim import _driver as driver
 from sedsabso_jax.optim import _fitness as l1
-from sedsabso_jax.optim._swarm import uniforms
+from sedsabso_jax.optim._random import uniforms
 
 # the modules (the packages re-export functions of the same names)
 reg = importlib.import_module("sedsabso_jax.dynamics._regressor")
@@ -112,13 +112,14 @@ def test_bad_memory_budget(budget):
 
 
 def test_runs_batched_per_backend(monkeypatch):
-    assert driver._batching("auto", 10, False) == 1  # in sequence on one CPU device
+    assert driver._batching("auto", 10) == (1, False)  # in sequence on one CPU device
+    assert driver._batching("shard", 10) == ("vmap", True)  # over every device (here one)
     monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
-    assert driver._batching("auto", 10, False, (10**6, 10**3)) == "vmap"
+    assert driver._batching("auto", 10, (10**6, 10**3)) == ("vmap", False)
     # runs that do not fit at once go in the largest chunks that do
     limit, _ = driver.memory_limit(jax.devices()[0])
     flight = limit // 7
-    assert driver._batching("auto", 100, False, (flight, 0)) == 7
+    assert driver._batching("auto", 100, (flight, 0)) == (7, False)
 
 
 def test_runs_that_do_not_fit_fail_before_compiling():
@@ -223,7 +224,7 @@ def test_a_constant_w_compiles_once_per_w():
     prob, lo, hi = l1_problem(m=200)
     W, tau = np.asarray(prob.W), np.asarray(prob.tau)
     kw = dict(key=jax.random.key(0), iterations=5)
-    solver = sj.LDWPSO(n_particles=11)
+    solver = sj.LDWPSO(population_size=11)
     sj.minimise(prob, solver, lo, hi, **kw)
     assert sj.minimise(sj.L1Residual(W, tau + 1.0), solver, lo, hi, **kw).compile_s == 0.0
     assert sj.minimise(sj.L1Residual(2 * W, tau), solver, lo, hi, **kw).compile_s > 0.0
@@ -237,8 +238,8 @@ PINNED_L1 = {
 
 
 def _small(name):
-    return {"SEDSABSO": sj.SEDSABSO(n_start=40, n_phases=2), "BSO": sj.BSO(n_beetles=20),
-            "LDWPSO": sj.LDWPSO(n_particles=20)}[name]
+    return {"SEDSABSO": sj.SEDSABSO(population_size=40, n_phases=2),
+            "BSO": sj.BSO(population_size=20), "LDWPSO": sj.LDWPSO(population_size=20)}[name]
 
 
 @pytest.mark.parametrize("name", PINNED_L1)

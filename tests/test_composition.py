@@ -23,7 +23,7 @@ def rosenbrock(x, args=None):
 
 
 def solvers():
-    out = [sj.SEDSABSO(n_phases=2), sj.BSO(n_beetles=20), sj.LDWPSO(n_particles=20)]
+    out = [sj.SEDSABSO(n_phases=2), sj.BSO(population_size=20), sj.LDWPSO(population_size=20)]
     try:
         import evosax  # noqa: F401
 
@@ -66,7 +66,7 @@ def test_vmap_over_args_equals_runs_one_by_one(solver):
 
 
 def test_vmap_over_boxes_and_runs_inside_jit():
-    solver = sj.BSO(n_beetles=10)
+    solver = sj.BSO(population_size=10)
     scales = jnp.array([1.0, 2.0])
     key = jax.random.key(4)
     traced = jax.jit(jax.vmap(lambda c: sj.minimise(rosenbrock, solver, -c * LO / LO,
@@ -85,7 +85,7 @@ def test_vmap_over_data_of_eq_17():
     rng = np.random.default_rng(0)
     W = rng.standard_normal((60, 3))
     taus = jnp.asarray(rng.standard_normal((3, 60)))
-    solver = sj.LDWPSO(n_particles=10)
+    solver = sj.LDWPSO(population_size=10)
     key = jax.random.key(5)
     traced = jax.vmap(lambda t: sj.minimise(sj.L1Residual(W, t), solver, -np.ones(3),
                                             np.ones(3), key=key, iterations=K).f)(taus)
@@ -135,7 +135,7 @@ def test_a_loop_the_user_owns_gives_minimise_numbers(solver):
 
 
 def test_ask_and_tell_refuse_the_wrong_order():
-    solver = sj.SEDSABSO(n_start=6)
+    solver = sj.SEDSABSO(population_size=6)
     lo, hi = jnp.asarray(LO), jnp.asarray(HI)
     state = solver.init(sj.BlackBox(rosenbrock), lo, hi, jax.random.key(0), 5)
     with pytest.raises(ValueError, match="no points were asked for"):
@@ -154,8 +154,8 @@ def test_ask_and_tell_refuse_the_wrong_order():
 
 @pytest.mark.parametrize("make, match", [
     (lambda: sj.SEDSABSO(decay=1.5), r"decay must lie in \(0, 1\)"),
-    (lambda: sj.BSO(lam=2.0), r"lam must lie in \[0, 1\]"),
-    (lambda: sj.LDWPSO(n_particles=0), "n_particles must be an integer >= 1"),
+    (lambda: sj.BSO(beetle=sj.optim.BeetleStep(lam=2.0)), r"lam must lie in \[0, 1\]"),
+    (lambda: sj.LDWPSO(population_size=0), "population_size must be an integer >= 1"),
     (lambda: sj.Evosax("CMAES"), "unknown evosax strategy 'CMAES'"),
 ])
 def test_bad_hyperparameter_fails_when_the_solver_is_built(make, match):

@@ -307,7 +307,7 @@ def test_sampling_margin_bounds_the_peaks_between_samples(seed, N, S):
         assert np.all(peak * (1 - delta) <= sampled * (1 + 1e-12))
 
 
-SMALL = {"solver": sj.LDWPSO(n_particles=20), "iterations": 30, "design_samples": 50}
+SMALL = {"solver": sj.LDWPSO(population_size=20), "iterations": 30, "design_samples": 50}
 
 
 @pytest.fixture(scope="module")

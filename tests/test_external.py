@@ -57,7 +57,7 @@ def test_nonfinite_fitness_is_counted_and_never_best():
     assert int(r.n_nonfinite) > 0 and np.isfinite(float(r.f)) and float(r.x[0]) <= 0
 
 
-@pytest.mark.parametrize("solver", [sj.SEDSABSO(), sj.BSO(n_beetles=7), sj.LDWPSO(),
+@pytest.mark.parametrize("solver", [sj.SEDSABSO(), sj.BSO(population_size=7), sj.LDWPSO(),
                                     Evosax("CMA_ES"), Evosax("PSO", population_size=9),
                                     Evosax("Open_ES")], ids=str)
 def test_evaluation_counts_match_the_runs(solver):

@@ -163,7 +163,7 @@ def test_swarm_identification(rs010n, rng):
     s = ident.settings
     assert s["runs"] == 2 and s["iterations"] == 30 and s["seed"] == 3
     assert s["box"] == {"fraction": 0.1, "floor": 0.1, "centre": "prior"}
-    assert s["solver"]["n_particles"] == 50
+    assert s["solver"]["population_size"] == 50
     json.dumps(ident.as_dict())  # JSON-ready
     v = np.asarray(base.values)
     half = np.maximum(0.1 * np.abs(v), 0.1)

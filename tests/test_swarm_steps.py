@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 import sedsabso_jax as sj
-from sedsabso_jax.optim._swarm import SwarmState, initial_state, set_active, shrink
+from sedsabso_jax.optim import BeetleStep
+from sedsabso_jax.optim._population import SwarmState, initial_state, set_active, shrink
 
 D, SLOTS, M = 3, 5, 8
 TEMPERATURE = 0.5  # of the same order as the candidates' fitness differences
@@ -65,14 +66,16 @@ def _with(s, fitness, antenna=A, **changes):
 def step(solver, fitness, s, t, lo, hi, randomness, iterations=10):
     """Iteration ``t`` of ``iterations`` from an iteration's randomness (what
     ``solver.randomness`` gives: keys, or for SEDSABSO ``(keys, r, u)``), drawn for the
-    state's population."""
+    state's population: its rounds, without the slots' reordering of a phase's start."""
     draws = solver.draw(randomness, s.x.shape, s.x.dtype)
-    s = dataclasses.replace(s, t=jnp.int32(t), iterations=iterations)
+    s = dataclasses.replace(s, t=jnp.int32(t), iterations=iterations,
+                            pending=solver.initial_pending(D, s.x.dtype))
     return solver.update(fitness, s, draws, jnp.asarray(lo), jnp.asarray(hi))
 
 
 def as_numpy(s) -> dict:
-    return {k: np.asarray(getattr(s, k)) for k in SwarmState.__dataclass_fields__}
+    return {k: np.asarray(getattr(s, k)) for k in SwarmState.__dataclass_fields__
+            if k not in ("pending", "key")}
 
 
 # ------------------------------------------------------------------------ references
@@ -118,7 +121,7 @@ def sedsabso_ref(s, W, tau, lo, hi, r1, r2, r, u, p):
     is better; q candidates P_g (1 + s r_k) (Eq. 14), clipped to the box, each accepted in
     turn as the guide when exp(-(f_k - f_guide) / T) > u_k; the best ever kept apart; then
     T <- decay T."""
-    s, (gx, gf) = bso_ref(s, W, tau, lo, hi, r1, r2, p)
+    s, (gx, gf) = bso_ref(s, W, tau, lo, hi, r1, r2, p.beetle)
     if gf < s["guide_f"]:
         s["guide_x"], s["guide_f"] = gx, gf
     cand = np.clip(gx * (1 + p.perturbation_scale * r), lo, hi)
@@ -148,16 +151,17 @@ def assert_state(actual, expected, keys=("x", "v", "pbest_x", "pbest_f", "guide_
 @pytest.mark.parametrize("literal_sign", [False, True])
 def test_bso_step(literal_sign):
     fitness, W, tau, lo, hi, s = problem()
-    solver = sj.BSO(n_beetles=SLOTS, vmax_fraction=0.1, literal_sign=literal_sign)
+    solver = sj.BSO(population_size=SLOTS,
+                    beetle=BeetleStep(vmax_fraction=0.1, literal_sign=literal_sign))
     keys = jax.random.split(jax.random.key(7))
     r1 = np.asarray(jax.random.uniform(keys[0], (SLOTS, D), jnp.float64))
     r2 = np.asarray(jax.random.uniform(keys[1], (SLOTS, D), jnp.float64))
-    expected, (gx, gf) = bso_ref(as_numpy(s), W, tau, lo, hi, r1, r2, solver)
+    expected, (gx, gf) = bso_ref(as_numpy(s), W, tau, lo, hi, r1, r2, solver.beetle)
     expected["guide_x"], expected["guide_f"] = gx, gf  # BSO's guide: the swarm's best
     after = step(solver, fitness, s, 0, lo, hi, keys)
     assert_state(after, expected)
     # the clamp and the box both acted, and the inactive slot's personal best is frozen
-    vmax = solver.vmax_fraction * (hi - lo)
+    vmax = solver.beetle.vmax_fraction * (hi - lo)
     assert np.any(np.isclose(np.abs(expected["v"]), vmax))
     assert np.any(np.isclose(expected["x"], hi)) or np.any(np.isclose(expected["x"], lo))
     np.testing.assert_array_equal(np.asarray(after.pbest_f)[2], np.asarray(s.pbest_f)[2])
@@ -178,9 +182,9 @@ def test_bso_moves_toward_the_better_antenna():
     s = _with(s, fitness, x=np.ones((1, 1)), v=np.ones((1, 1)), active=np.array([True]))
     zeros = jnp.zeros((1, 1))
     for literal, sign in ((False, -1.0), (True, 1.0)):
-        solver = sj.BSO(n_beetles=1, w=0.0, lam=0.0, literal_sign=literal)
-        after, _ = solver.beetle_step(fitness, s, lo, hi, zeros, zeros)
-        assert float(after.x[0, 0]) == pytest.approx(1.0 + sign * solver.delta)
+        beetle = BeetleStep(w=0.0, lam=0.0, literal_sign=literal)
+        x, _ = beetle.move(s, zeros, zeros, lo, hi)
+        assert float(x[0, 0]) == pytest.approx(1.0 + sign * beetle.delta)
 
 
 def test_antennae_sit_at_half_the_distance_delta_over_c():
@@ -189,16 +193,18 @@ def test_antennae_sit_at_half_the_distance_delta_over_c():
     d / 2 = 0.0125 says the right antenna is better (d = delta c would say the left)."""
     fitness = sj.BlackBox(lambda x, args: jnp.cos(100.0 * x[0]))
     lo, hi = jnp.full(1, -1.0), jnp.full(1, 1.0)
-    solver = sj.BSO(n_beetles=1, w=1.0, lam=0.0)  # the antenna step alone; V stays 1
+    # the antenna step alone; V stays 1
+    solver = sj.BSO(population_size=1, beetle=BeetleStep(w=1.0, lam=0.0))
     s = solver.init(fitness, lo, hi, jax.random.key(0), 10)
     # the antennae as the solver places them (solver.antenna), at x = 0.01, V = 1
     s = _with(s, fitness, antenna=solver.antenna, x=np.full((1, 1), 0.01), v=np.ones((1, 1)),
               active=np.array([True]))
-    after, _ = solver.beetle_step(fitness, s, lo, hi, jnp.zeros((1, 1)), jnp.zeros((1, 1)))
-    d = solver.delta / solver.c
+    zeros = jnp.zeros((1, 1))
+    after = solver.update(fitness, s, (zeros, zeros), lo, hi)
+    d = solver.beetle.delta / solver.beetle.c
     side = np.sign(np.cos(100 * (0.01 + d / 2)) - np.cos(100 * (0.01 - d / 2)))
     assert side == -1.0  # the antenna at x + V d/2 is the better one
-    assert float(after.x[0, 0]) == pytest.approx(0.01 + solver.delta)
+    assert float(after.x[0, 0]) == pytest.approx(0.01 + solver.beetle.delta)
     # and the new position's antennae, computed in the step, sit at d / 2 too
     x, v = float(after.x[0, 0]), float(after.v[0, 0])
     assert v == 1.0
@@ -210,7 +216,7 @@ def test_antennae_sit_at_half_the_distance_delta_over_c():
 @pytest.mark.parametrize("t, w", [(0, 0.9), (9, 0.4), (3, 0.9 - 0.5 * 3 / 9)])
 def test_ldwpso_step_and_inertia_schedule(t, w):
     fitness, W, tau, lo, hi, s = problem(1)
-    solver = sj.LDWPSO(n_particles=SLOTS, vmax_fraction=0.3)
+    solver = sj.LDWPSO(population_size=SLOTS, vmax_fraction=0.3)
     keys = jax.random.split(jax.random.key(t))
     r1 = np.asarray(jax.random.uniform(keys[0], (SLOTS, D), jnp.float64))
     r2 = np.asarray(jax.random.uniform(keys[1], (SLOTS, D), jnp.float64))
@@ -228,8 +234,8 @@ def test_ldwpso_step_and_inertia_schedule(t, w):
 def sedsabso_case():
     fitness, W, tau, lo, hi, s = problem(2, upper=5.0)
     s = _with(s, fitness, temperature=TEMPERATURE)
-    solver = sj.SEDSABSO(n_start=SLOTS, vmax_fraction=0.2, temperature=TEMPERATURE,
-                         n_trials=4)
+    solver = sj.SEDSABSO(population_size=SLOTS, beetle=BeetleStep(vmax_fraction=0.2),
+                         temperature=TEMPERATURE, n_trials=4)
     return fitness, W, tau, lo, hi, s, solver
 
 
@@ -272,7 +278,7 @@ def test_metropolis_compares_with_the_current_guide():
     k12, r1, r2, r, _ = draws(11)
     u = np.array([1e-12, 0.999999, 0.999999, 0.999999])
     ref, accepted, fc = sedsabso_ref(as_numpy(s), W, tau, lo, hi, r1, r2, r, u, solver)
-    _, (_, gf) = bso_ref(as_numpy(s), W, tau, lo, hi, r1, r2, solver)
+    _, (_, gf) = bso_ref(as_numpy(s), W, tau, lo, hi, r1, r2, solver.beetle)
     later = [k for k in accepted if k > 0]
     assert accepted[0] == 0 and later and all(gf < fc[k] < fc[0] for k in later)
     out = step(solver, fitness, s, 0, lo, hi, (k12, jnp.asarray(r), jnp.asarray(u)))
@@ -288,9 +294,9 @@ def test_sedsabso_candidates_are_eq_14():
     s = _with(s, fitness, temperature=1e12)
     k12, r1, r2, r, _ = draws(3)
     for scale in (1.0, 0.25):
-        solver = sj.SEDSABSO(n_start=SLOTS, vmax_fraction=0.2, temperature=1e12, n_trials=4,
-                             perturbation_scale=scale)
-        beetles, (gx, _) = bso_ref(as_numpy(s), W, tau, lo, hi, r1, r2, solver)
+        solver = sj.SEDSABSO(population_size=SLOTS, beetle=BeetleStep(vmax_fraction=0.2),
+                             temperature=1e12, n_trials=4, perturbation_scale=scale)
+        beetles, (gx, _) = bso_ref(as_numpy(s), W, tau, lo, hi, r1, r2, solver.beetle)
         cand = np.clip(gx * (1 + scale * r), lo, hi)
         assert np.any(cand == hi) or np.any(cand == lo)  # the clip acts on this draw
         for k in range(4):
@@ -306,7 +312,8 @@ def test_guide_and_best_are_kept_apart():
     than the swarm's best, and the reported best is still the best point seen."""
     fitness, W, tau, lo, hi, s, _ = sedsabso_case()
     s = _with(s, fitness, temperature=1e12)
-    solver = sj.SEDSABSO(n_start=SLOTS, vmax_fraction=0.2, temperature=1e12, n_trials=4)
+    solver = sj.SEDSABSO(population_size=SLOTS, beetle=BeetleStep(vmax_fraction=0.2),
+                         temperature=1e12, n_trials=4)
     k12, r1, r2, r, _ = draws(5)
     out = step(solver, fitness, s, 0, lo, hi, (k12, jnp.asarray(r), jnp.zeros(4) + 0.5))
     cand_f = f_ref(np.asarray(out.guide_x)[None], W, tau)[0]

@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 
 import sedsabso_jax as sj
+from sedsabso_jax.optim._phases import phases
+from sedsabso_jax.optim._random import uniforms
 from sedsabso_jax.optim._sedsabso import metropolis_accept
-from sedsabso_jax.optim._swarm import phases, uniforms
 
 # SEDSABSO with 2 compiled phases keeps the suite's compile time down; the phase logic is
 # tested on its own below.
@@ -149,7 +150,7 @@ def test_sedsabso_without_annealing():
     r = sj.minimise(sphere, solver, -5 * np.ones(4), 5 * np.ones(4), key=jax.random.key(1),
                     iterations=50)
     assert int(r.sa_accepted) == 0 and np.isfinite(float(r.f))
-    assert int(r.n_evaluations) == solver.n_start + 3 * int(solver.schedule(50).sum())
+    assert int(r.n_evaluations) == solver.population_size + 3 * int(solver.schedule(50).sum())
 
 
 def test_same_key_same_numbers_other_key_other_numbers():
@@ -164,21 +165,20 @@ def test_same_key_same_numbers_other_key_other_numbers():
     assert b.compile_s == 0.0  # the second call reused the compiled code
 
 
-@pytest.mark.parametrize("batch", ["vmap", 1, 2, "auto"])
+@pytest.mark.parametrize("batch", ["vmap", 1, 2, "auto", "shard"])
 def test_batched_runs_equal_single_runs(batch):
     solver = SOLVERS["BSO"]
     box = (-2 * np.ones(2), 2 * np.ones(2))
     key = jax.random.key(5)
-    many = sj.minimise(rosenbrock, solver, *box, key=key, iterations=300, runs=3, shard=False,
-                       batch=batch)
+    many = sj.minimise(rosenbrock, solver, *box, key=key, iterations=300, runs=3, batch=batch)
     for i, k in enumerate(jax.random.split(key, 3)):
         one = sj.minimise(rosenbrock, solver, *box, key=k, iterations=300)
         np.testing.assert_allclose(one.x, many.x[i], rtol=1e-10, atol=1e-12)
         np.testing.assert_allclose(one.history_f, many.history_f[i], rtol=1e-10, atol=1e-12)
 
 
-@pytest.mark.parametrize("batch, message", [(0, "integer >= 1"), ("loop", "'auto', 'vmap'"),
-                                            (True, "integer >= 1")])
+@pytest.mark.parametrize("batch, message", [(0, "integer >= 1"), (True, "integer >= 1"),
+                                            ("loop", "'auto', 'vmap', 'shard'")])
 def test_bad_batch(batch, message):
     with pytest.raises(ValueError, match=message):
         sj.minimise(rosenbrock, SOLVERS["BSO"], -np.ones(2), np.ones(2), key=jax.random.key(0),
@@ -212,8 +212,8 @@ def test_float32_runs(name):
 
 
 @pytest.mark.parametrize("make,call,match", [
-    (lambda: sj.SEDSABSO(n_start=0), {}, "n_start must be an integer >= 1"),
-    (lambda: sj.BSO(n_beetles=0), {}, "n_beetles must be an integer >= 1"),
+    (lambda: sj.SEDSABSO(population_size=0), {}, "population_size must be an integer >= 1"),
+    (lambda: sj.BSO(population_size=0), {}, "population_size must be an integer >= 1"),
     (lambda: sj.SEDSABSO(n_trials=-1), {}, "n_trials must be an integer >= 0"),
     (lambda: sj.SEDSABSO(temperature=0.0), {}, "temperature must be > 0"),
     (lambda: sj.SEDSABSO(decay=1.0), {}, r"decay must lie in \(0, 1\)"),
@@ -246,8 +246,9 @@ def test_runs_shard_over_devices():
         assert len(jax.devices()) == 4
         f = lambda x, a: jnp.sum(x ** 2)
         kw = dict(lower=-np.ones(3), upper=np.ones(3), key=jax.random.key(0), iterations=50, runs=6)
-        a = sj.minimise(f, sj.BSO(n_beetles=8), shard=True, **kw)
-        b = sj.minimise(f, sj.BSO(n_beetles=8), shard=False, **kw)
+        a = sj.minimise(f, sj.BSO(population_size=8), **kw)  # batch "auto": sharded
+        b = sj.minimise(f, sj.BSO(population_size=8), batch="vmap", **kw)  # one device
+        assert len(b.f.sharding.device_set) == 1
         assert a.x.shape == (6, 3)
         np.testing.assert_allclose(a.x, b.x, rtol=1e-12, atol=1e-14)
         print("devices used:", len(a.f.sharding.device_set))
@@ -265,7 +266,7 @@ def test_one_run_is_timed_without_a_second_compilation():
     from sedsabso_jax.optim._driver import time_one_of_many
 
     box = (-2 * np.ones(3), 2 * np.ones(3))
-    solver = sj.BSO(n_beetles=9)
+    solver = sj.BSO(population_size=9)
     kw = dict(key=jax.random.key(3), iterations=40)
     sj.minimise(rosenbrock, solver, *box, runs=4, **kw)  # compiles the batched executable
     compile_s, run_s = time_one_of_many(rosenbrock, solver, *box, runs=4, **kw)

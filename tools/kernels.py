@@ -37,7 +37,7 @@ import numpy as np
 
 from benchmarks.device import describe, device_info
 from sedsabso_jax.optim._fitness import _antenna_terms, _matmul
-from sedsabso_jax.optim._swarm import uniforms
+from sedsabso_jax.optim._random import uniforms
 
 M, D, LENGTH = 3000, 21, 300
 

@@ -33,7 +33,7 @@ paper gives no N, wf, duration or rate; the choices here:
 - Solver: :func:`default_solver`, LDWPSO with 40 particles for 100 iterations (4040
   evaluations). On RS010N with Table 3, seeds 0, 1, 2, about 4000 evaluations each, this
   box: LDWPSO(40) x 100 gave cond 69.0, 64.8, 72.9; BSO(20) x 67: 74.9, 70.1, 81.4;
-  SEDSABSO(n_start=40, one phase) x 60: 89.7, 75.5, 85.0. The best random feasible draw
+  SEDSABSO(population_size=40, one phase) x 60: 89.7, 75.5, 85.0. The best random feasible draw
   of the default's budget (4040): 150.0, 141.7, 181.9. LDWPSO also compiles fastest:
   every place a swarm evaluates the fitness inlines the regressor into the compiled loop, twice for
   LDWPSO (initial population, step), five times for SEDSABSO (initial population, two
@@ -211,7 +211,7 @@ def default_solver() -> LDWPSO:
     """The default swarm of :func:`design_excitation`: LDWPSO with 40 particles (the
     paper's LDWPSO settings otherwise); the module docstring compares it with BSO and
     SEDSABSO on this problem."""
-    return LDWPSO(n_particles=40)
+    return LDWPSO(population_size=40)
 
 
 def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = DEFAULT_HARMONICS,

@@ -257,7 +257,7 @@ class BoxSearch(Estimator):
                        runs=self.runs)
         X, f = np.atleast_2d(np.asarray(res.x)), np.atleast_1d(np.asarray(res.f))
         best = int(np.argmin(f))
-        hyper = {fld.name: getattr(solver, fld.name) for fld in dataclasses.fields(solver)}
+        hyper = solver.hyperparameters()
         extra = {"box": box_setting, "runs": self.runs, "iterations": self.iterations,
                  "seed": self.seed, "solver": hyper, "best_run": best,
                  "f_runs": [float(v) for v in f], "compile_s": float(res.compile_s or 0.0),

@@ -19,7 +19,7 @@ number per beetle (:meth:`~._fitness.L1Residual.evaluate_with_antennae`). Asked 
 points (``ask``/``tell``), an iteration asks for each beetle's new position and its two
 antennae: ``3 N`` points.
 
-:class:`BeetleSwarm` holds this step and its hyperparameters; :class:`BSO` runs it with a
+:class:`BeetleStep` is this update with its hyperparameters; :class:`BSO` runs it with a
 constant population, :class:`~sedsabso_jax.SEDSABSO` adds annealing and a shrinking one.
 """
 
@@ -32,21 +32,23 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
-from ._fitness import Fitness
-from ._solver import Bounds, is_concrete
-from ._swarm import (
-    AbstractSwarm,
+from .. import _deprecation
+from ._population import (
     SwarmState,
     check_population,
     check_velocity_update,
     evaluate,
+    replace,
     update_bests,
 )
+from ._solver import Bounds, is_concrete
+from ._swarm import AbstractSwarm
 
 
-class BeetleSwarm(AbstractSwarm):
-    """The beetle update of Eq. 10-13 and its hyperparameters (defaults: the paper's Sec.
-    5.2); the population and the guide are the subclass's."""
+class BeetleStep(eqx.Module):
+    """The beetles' update of Eq. 10-13 and its hyperparameters (defaults: the paper's
+    Sec. 5.2), shared by :class:`BSO` and :class:`~sedsabso_jax.SEDSABSO`:
+    ``BSO(beetle=BeetleStep(lam=0.5))``."""
 
     c1: float = 2.0  # c1: cognitive coefficient (Eq. 11)
     c2: float = 2.0  # c2: social coefficient (Eq. 11)
@@ -67,11 +69,6 @@ class BeetleSwarm(AbstractSwarm):
         if self.delta <= 0 or self.c <= 0:
             raise ValueError(f"delta and c must be > 0, got delta={self.delta}, c={self.c}")
 
-    def evaluations(self, n_active: int | Int[np.ndarray, " t"]
-                    ) -> int | Int[np.ndarray, " t"]:
-        """Three per beetle: its new position and its two antennae (Eq. 12)."""
-        return 3 * n_active
-
     @property
     def antenna(self) -> float:
         """``a``: the antennae sit at ``x +- a V``, ``a = d / 2`` with ``d = delta / c``
@@ -79,55 +76,48 @@ class BeetleSwarm(AbstractSwarm):
         d = self.delta / self.c
         return 0.5 * d
 
-    def move(self, s: SwarmState, draws: Any, lower: Bounds, upper: Bounds
+    def vmax(self, lower: Bounds, upper: Bounds) -> Float[Array, " d"]:
+        return self.vmax_fraction * (upper - lower)
+
+    def move(self, s: SwarmState, r1: Float[Array, "slots d"], r2: Float[Array, "slots d"],
+             lower: Bounds, upper: Bounds
              ) -> tuple[Float[Array, "slots d"], Float[Array, "slots d"]]:
-        """Eq. 10-13 for every slot with ``draws`` the uniforms ``(r1, r2)`` of Eq. 11
-        (stacked or not): the antenna difference ``f(xl) - f(xr)`` at the current
+        """Eq. 10-13 for every slot with ``r1, r2`` the uniforms of Eq. 11: the new
+        positions and velocities. The antenna difference ``f(xl) - f(xr)`` at the current
         positions is the state's (computed with their fitness)."""
-        r1, r2 = draws[0], draws[1]
         direction = jnp.nan_to_num(jnp.sign(s.antennae))  # inf - inf: no preference
         if not self.literal_sign:
             direction = -direction
         xi = self.delta * s.v * direction[:, None]
-        vmax = self.vmax_fraction * (upper - lower)
+        vmax = self.vmax(lower, upper)
         v = self.w * s.v + self.c1 * r1 * (s.pbest_x - s.x) + self.c2 * r2 * (s.guide_x - s.x)
         v = jnp.clip(v, -vmax, vmax)
         return jnp.clip(s.x + self.lam * v + (1.0 - self.lam) * xi, lower, upper), v
 
-    def absorb_beetles(self, s: SwarmState, raw: Float[Array, " slots"],
-                       diff: Float[Array, " slots"] | None,
-                       diff_bad: Int[Array, " slots"] | None
-                       ) -> tuple[SwarmState, tuple[Float[Array, " d"], Float[Array, ""]]]:
-        """The moved beetles' fitness and antennae taken in: personal and best-ever
-        updated; returns the state and the swarm's global best ``(x, f)`` among the active
-        slots (the guide is the subclass's)."""
-        f, bad = evaluate(None, s.x, s.active, raw)
-        bad = s.slot_nonfinite + bad + jnp.where(s.active, s.antennae_bad, 0)
-        n_active = jnp.sum(s.active, dtype=jnp.int32)
-        s = eqx.tree_at(
-            lambda s: (s.antennae, s.antennae_bad, s.n_evaluations, s.slot_nonfinite), s,
-            (diff, diff_bad, s.n_evaluations + 3 * n_active, bad))
-        return update_bests(s, s.x, f)
 
-    def beetle_step(self, fitness: Fitness, s: SwarmState, lower: Bounds, upper: Bounds,
-                    r1: Float[Array, "slots d"], r2: Float[Array, "slots d"]
-                    ) -> tuple[SwarmState, tuple[Float[Array, " d"], Float[Array, ""]]]:
-        """Eq. 10-13 for every slot, with ``r1, r2`` the uniform draws of Eq. 11; returns
-        the state with bests updated and the swarm's global best (x, f) among the active
-        slots."""
-        x, v = self.move(s, (r1, r2), lower, upper)
-        raw, diff, diff_bad = self.evaluate_moved(fitness, x, v)
-        return self.absorb_beetles(eqx.tree_at(lambda s: (s.x, s.v), s, (x, v)), raw, diff,
-                                   diff_bad)
+def absorb_beetles(s: SwarmState, raw: Float[Array, " slots"],
+                   diff: Float[Array, " slots"] | None, diff_bad: Int[Array, " slots"] | None
+                   ) -> tuple[SwarmState, tuple[Float[Array, " d"], Float[Array, ""]]]:
+    """The moved beetles' fitness and antennae taken in: personal and best-ever updated;
+    returns the state and the swarm's global best ``(x, f)`` among the active slots (the
+    guide is the swarm's own)."""
+    f, bad = evaluate(None, s.x, s.active, raw)
+    bad = s.slot_nonfinite + bad + jnp.where(s.active, s.antennae_bad, 0)
+    n_active = jnp.sum(s.active, dtype=jnp.int32)
+    s = eqx.tree_at(
+        lambda s: (s.antennae, s.antennae_bad, s.n_evaluations, s.slot_nonfinite), s,
+        (diff, diff_bad, s.n_evaluations + 3 * n_active, bad))
+    return update_bests(s, s.x, f)
 
 
-class BSO(BeetleSwarm):
+class BSO(AbstractSwarm):
     """Beetle swarm with a constant population. Defaults: the paper's Sec. 5.2."""
 
-    n_beetles: int = 50  # N: population size
+    population_size: int = 50  # N: population size
+    beetle: BeetleStep = BeetleStep()  # Eq. 10-13's hyperparameters
 
     def __check_init__(self) -> None:
-        check_population(self.n_beetles, "n_beetles")
+        check_population(self.population_size, "population_size")
 
     @classmethod
     def paper(cls) -> BSO:
@@ -136,11 +126,32 @@ class BSO(BeetleSwarm):
         return cls()
 
     @property
-    def n_slots(self) -> int:
-        return self.n_beetles
+    def n_beetles(self) -> int:
+        """Deprecated: :attr:`population_size`."""
+        _deprecation.warn("BSO.n_beetles", "BSO.population_size")
+        return self.population_size
+
+    @property
+    def antenna(self) -> float:
+        return self.beetle.antenna
+
+    def vmax(self, lower: Bounds, upper: Bounds) -> Float[Array, " d"]:
+        return self.beetle.vmax(lower, upper)
+
+    def evaluations(self, n_active: int | Int[np.ndarray, " t"]
+                    ) -> int | Int[np.ndarray, " t"]:
+        """Three per beetle: its new position and its two antennae (Eq. 12)."""
+        return 3 * n_active
+
+    def move(self, s: SwarmState, draws: Any, lower: Bounds, upper: Bounds) -> SwarmState:
+        x, v = self.beetle.move(s, draws[0], draws[1], lower, upper)
+        return replace(s, x=x, v=v)
 
     def absorb(self, s: SwarmState, raw: Float[Array, " slots"],
                diff: Float[Array, " slots"] | None, diff_bad: Int[Array, " slots"] | None
                ) -> SwarmState:
-        s, (gx, gf) = self.absorb_beetles(s, raw, diff, diff_bad)
-        return eqx.tree_at(lambda s: (s.guide_x, s.guide_f), s, (gx, gf))
+        s, (gx, gf) = absorb_beetles(s, raw, diff, diff_bad)
+        return replace(s, guide_x=gx, guide_f=gf)
+
+
+_deprecation.renamed_arguments(BSO, {"n_beetles": "population_size"})

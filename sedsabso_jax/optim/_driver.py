@@ -10,6 +10,7 @@ traced into the caller's program (no compilation, timing or sharding of its own)
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import math
 import os
@@ -28,48 +29,83 @@ from ._box import check_bounds
 from ._fitness import Fitness, FitnessLike, as_fitness
 from ._result import Result
 from ._solver import AbstractSolver
-from ._swarm import PREDRAW
 
-_COMPILED: dict = {}
-
-
-def _compiled(fn, static, *args):
-    """AOT-compile ``fn`` once per (static configuration, argument structure); return the
-    executable and the seconds spent compiling (0 when reused). A run compiled on its own
-    (``static[2] == 1``) may draw its random numbers before its loops (:data:`._swarm.
-    PREDRAW`)."""
-    leaves, treedef = jax.tree_util.tree_flatten(args)
-    spec = tuple((jnp.shape(x), jnp.result_type(x), getattr(x, "sharding", None))
-                 for x in leaves)
-    key = (fn, static, treedef, spec)
-    if key in _COMPILED:
-        return _COMPILED[key], 0.0
-    t0 = time.perf_counter()
-    token = PREDRAW.set(len(static) < 3 or static[2] == 1)
-    try:
-        exe = jax.jit(fn, static_argnums=(0,)).lower(static, *args).compile()
-    finally:
-        PREDRAW.reset(token)
-    _COMPILED[key] = exe
-    return exe, time.perf_counter() - t0
+#: How many compiled runs :func:`minimise` keeps (least recently used dropped first).
+CACHE_SIZE = 32
 
 
-def _run_one(static, solver_dyn, fitness, lower, upper, key) -> Result:
-    solver_static, iterations = static[:2]
+class RunConfig(eqx.Module):
+    """The static configuration of a compiled call: ``iterations`` per run, how the runs
+    share the call (``batch``: None for one run, ``"vmap"`` or a chunk size, see
+    :func:`_batching`), and whether a run may make its random draws before its loops
+    (``predraw``: a run compiled on its own on the CPU)."""
+
+    iterations: int = eqx.field(static=True)
+    batch: str | int | None = eqx.field(static=True, default=None)
+    predraw: bool = eqx.field(static=True, default=False)
+
+
+class CompiledRuns:
+    """The compiled calls of :func:`minimise`, one per (configuration, argument
+    structure), least recently used dropped beyond ``size``; :func:`clear_compiled`
+    empties it."""
+
+    def __init__(self, size: int = CACHE_SIZE):
+        self.size = size
+        self._calls: collections.OrderedDict = collections.OrderedDict()
+
+    def get(self, fn, config: RunConfig, static, *args):
+        """The executable of ``fn(config, static, *args)`` and the seconds spent
+        compiling it (0 when reused)."""
+        leaves, treedef = jax.tree_util.tree_flatten(args)
+        spec = tuple((jnp.shape(x), jnp.result_type(x),
+                      x.sharding if isinstance(x, jax.Array) else None) for x in leaves)
+        key = (fn, config, static, treedef, spec)
+        if key in self._calls:
+            self._calls.move_to_end(key)
+            return self._calls[key], 0.0
+        t0 = time.perf_counter()
+        exe = jax.jit(fn, static_argnums=(0, 1)).lower(config, static, *args).compile()
+        self._calls[key] = exe
+        while len(self._calls) > self.size:
+            self._calls.popitem(last=False)
+        return exe, time.perf_counter() - t0
+
+    def __len__(self) -> int:
+        return len(self._calls)
+
+    def clear(self) -> None:
+        self._calls.clear()
+
+
+_COMPILED = CompiledRuns()
+
+
+def clear_compiled() -> None:
+    """Drop every run :func:`~sedsabso_jax.minimise` compiled (the next call of each
+    configuration compiles again), e.g. to free memory in a long session."""
+    _COMPILED.clear()
+
+
+def _run_one(config: RunConfig, solver_static, solver_dyn, fitness, lower, upper, key
+             ) -> Result:
     solver = eqx.combine(solver_dyn, solver_static)
-    return solver.run(fitness, lower, upper, key, iterations)
+    return solver.run(fitness, lower, upper, key, config.iterations, predraw=config.predraw)
 
 
-def _run_many(static, solver_dyn, fitness, lower, upper, keys, n_runs) -> Result:
+def _run_many(config: RunConfig, solver_static, solver_dyn, fitness, lower, upper, keys,
+              n_runs) -> Result:
     """All runs, one per key. In sequence (batch 1), only the first ``n_runs`` are
     computed (the rest of the output stays zero): the same executable then times a
     single run without a second compilation."""
-    one = lambda k: _run_one(static, solver_dyn, fitness, lower, upper, k)  # noqa: E731
-    batch = static[2]
-    if batch == "vmap":
+    def one(k: PRNGKeyArray) -> Result:
+        return _run_one(config, solver_static, solver_dyn, fitness, lower, upper, k)
+
+    if config.batch == "vmap":
         return jax.vmap(one)(keys)
-    if batch > 1:
-        return jax.lax.map(one, keys, batch_size=batch)  # chunks of vmapped runs
+    assert isinstance(config.batch, int)
+    if config.batch > 1:
+        return jax.lax.map(one, keys, batch_size=config.batch)  # chunks of vmapped runs
 
     def body(i: Int[Array, ""], out: Result) -> Result:
         return jax.tree.map(lambda o, r: o.at[i].set(r), out, one(keys[i]))
@@ -79,19 +115,35 @@ def _run_many(static, solver_dyn, fitness, lower, upper, keys, n_runs) -> Result
     return jax.lax.fori_loop(0, n_runs, body, out)
 
 
-def _batching(batch, runs: int, sharded: bool, run_bytes: tuple[int, int] = (0, 0)):
-    """How ``runs`` runs share one compiled call: ``"vmap"`` (all at once) or an int k
-    (``lax.map`` in chunks of k vmapped runs). ``"auto"``: on a single CPU device runs in
-    sequence (k = 1), which compiles fastest and lets one run be timed through the same
-    executable (:func:`time_one_of_many`); on accelerators and when sharded over several
-    devices vmap, or on one accelerator the largest chunks that fit :func:`memory_limit`
-    when all runs at once would not. ``run_bytes``: a run's memory while in flight and
-    its output (:func:`run_bytes`). Runs that do not fit (an explicit ``"vmap"`` or
-    chunk, or one run alone) raise ValueError naming the limit, before anything
-    compiles. For throughput on the CPU, chunks of 5 measured best (2-core CPU, SEDSABSO,
-    10 runs, fastest of 3: float64 5.3 s vs 6.4 s in sequence and 6.6 s all vmapped;
-    float32 2.6 / 3.5 / 3.0 s; compilation 2-4 s longer)."""
+#: What ``batch`` of :func:`minimise` may be besides a chunk size.
+BATCHES = ("auto", "vmap", "shard")
+
+
+def _batching(batch, runs: int, run_bytes: tuple[int, int] = (0, 0), traced: bool = False
+              ) -> tuple[str | int, bool]:
+    """``(mode, sharded)``: how ``runs`` runs share one compiled call. ``mode`` is
+    ``"vmap"`` (all at once) or an int k (``lax.map`` in chunks of k vmapped runs);
+    ``sharded``: the runs spread over every device (``jax.sharding``, vmapped on each).
+    ``batch``: ``"vmap"`` or k on one device; ``"shard"`` over every device; ``"auto"``:
+    over every device when there are several, else on a single CPU device in sequence
+    (k = 1), which compiles fastest and lets one run be timed through the same executable
+    (:func:`time_one_of_many`), on one accelerator vmap, or the largest chunks that fit
+    :func:`memory_limit` when all runs at once would not. Inside a caller's
+    transformation (``traced``) nothing is sharded. ``run_bytes``: a run's memory while
+    in flight and its output (:func:`run_bytes`). Runs that do not fit (an explicit
+    ``"vmap"`` or chunk, or one run alone) raise ValueError naming the limit, before
+    anything compiles. For throughput on the CPU, chunks of 5 measured best (2-core CPU,
+    SEDSABSO, 10 runs, fastest of 3: float64 5.3 s vs 6.4 s in sequence and 6.6 s all
+    vmapped; float32 2.6 / 3.5 / 3.0 s; compilation 2-4 s longer)."""
+    chunk = isinstance(batch, (int, np.integer)) and not isinstance(batch, bool) and batch >= 1
+    if not chunk and batch not in BATCHES:
+        raise ValueError(f"batch must be 'auto', 'vmap', 'shard' or an integer >= 1, got "
+                         f"{batch!r}")
+    if batch == "shard" and traced:
+        raise ValueError("batch='shard' spreads the runs over the devices, which a call "
+                         "inside jax.jit or jax.vmap cannot: use 'auto', 'vmap' or k")
     devices = jax.devices()
+    sharded = batch == "shard" or (batch == "auto" and len(devices) > 1 and not traced)
     per_device = math.ceil(runs / len(devices)) if sharded else runs
     limit, where = memory_limit(devices[0])
     flight, out = run_bytes
@@ -104,26 +156,19 @@ def _batching(batch, runs: int, sharded: bool, run_bytes: tuple[int, int] = (0, 
             f"{need(k) / 2**30:.3g} GiB, more than the limit of {limit / 2**30:.3g} GiB "  # type: ignore[operator]
             f"({where}); use fewer runs or a smaller batch=k")
 
-    if batch == "auto":
-        if jax.default_backend() == "cpu" and not sharded:
-            batch = 1
-        elif limit is None or fits(per_device) or sharded:
-            batch = "vmap"
-        else:
-            batch = max(1, int((limit - per_device * out) // max(flight, 1)))
-    if batch == "vmap":
-        if not fits(per_device):
-            raise too_big(per_device, "batch='vmap'")
-        return batch
-    if isinstance(batch, (int, np.integer)) and not isinstance(batch, bool) and batch >= 1:
-        if sharded:
-            raise ValueError("batch must be 'vmap' or 'auto' when runs are sharded over "
-                             "several devices (shard=False to run them on one)")
-        batch = int(min(batch, runs))
-        if not fits(batch):
-            raise too_big(batch, f"batch={batch}")
-        return batch
-    raise ValueError(f"batch must be 'auto', 'vmap' or an integer >= 1, got {batch!r}")
+    if batch == "auto" and not sharded:
+        if jax.default_backend() == "cpu":
+            batch, chunk = 1, True
+        elif not fits(per_device):
+            return max(1, int((limit - per_device * out) // max(flight, 1))), False  # type: ignore[operator]
+    if chunk:
+        k = int(min(batch, runs))
+        if not fits(k):
+            raise too_big(k, f"batch={k}")
+        return k, False
+    if not fits(per_device):
+        raise too_big(per_device, f"batch={batch!r}")
+    return "vmap", sharded
 
 
 def memory_limit(device: jax.Device) -> tuple[int | None, str]:
@@ -154,7 +199,7 @@ def run_bytes(solver: AbstractSolver, fitness: Fitness, dim: int, dtype: DTypeLi
     counted."""
     itemsize = jnp.dtype(dtype).itemsize
     slots = solver.population(dim)
-    m = getattr(getattr(fitness, "tau", None), "shape", (dim,))[0]
+    m = fitness.rows or dim
     flight = (6 * slots * max(m, dim) * itemsize + 12 * slots * dim * itemsize
               + iterations * 16 * (dim + 8))  # keys and small draws per iteration
     return int(flight), int(iterations * (itemsize + 4) + 4 * dim * itemsize)
@@ -179,22 +224,24 @@ def _cast_all(dtype, *trees):
     return tuple(jax.tree.map(cast, t) for t in trees)
 
 
-def _prepare(fitness, solver, lower, upper, key, iterations, runs, args, dtype, shard,
-             batch="auto"):
-    """Check everything and build the compiled function's arguments (nothing runs)."""
+def _prepare(fitness, solver, lower, upper, key, iterations, runs, args, dtype, batch):
+    """Check everything and build the compiled function, its configuration and its
+    arguments (nothing runs)."""
     fitness, dtype = _check_common(fitness, solver, iterations, runs, args, dtype)
-    lower, upper = check_bounds(lower, upper, getattr(fitness, "dim", None))
+    lower, upper = check_bounds(lower, upper, fitness.dim)
     lo, hi = jnp.asarray(lower, dtype), jnp.asarray(upper, dtype)
     dyn, static = eqx.partition(solver, eqx.is_array)
     fitness, dyn = _cast_all(dtype, fitness, dyn)
+    cpu = jax.default_backend() == "cpu"
     if runs is None:
-        return _run_one, (static, int(iterations)), (dyn, fitness, lo, hi, key)
-    devices = jax.devices()
-    sharded = shard and len(devices) > 1
-    static_key = (static, int(iterations), _batching(
-        batch, runs, sharded, run_bytes(solver, fitness, lo.shape[0], dtype, iterations)))
+        return (_run_one, RunConfig(int(iterations), predraw=cpu), static,
+                (dyn, fitness, lo, hi, key))
+    mode, sharded = _batching(batch, runs, run_bytes(solver, fitness, lo.shape[0], dtype,
+                                                     iterations))
+    config = RunConfig(int(iterations), batch=mode, predraw=cpu and mode == 1)
     keys = jax.random.split(key, runs)
     if sharded:
+        devices = jax.devices()
         # pad the runs to a multiple of the device count; the extra runs are dropped
         padded = math.ceil(runs / len(devices)) * len(devices)
         if padded > runs:
@@ -203,7 +250,7 @@ def _prepare(fitness, solver, lower, upper, key, iterations, runs, args, dtype, 
         mesh = jax.sharding.Mesh(np.array(devices), ("runs",))
         spec = jax.sharding.PartitionSpec("runs")
         keys = jax.device_put(keys, jax.sharding.NamedSharding(mesh, spec))
-    return _run_many, static_key, (dyn, fitness, lo, hi, keys, jnp.int32(runs))
+    return _run_many, config, static, (dyn, fitness, lo, hi, keys, jnp.int32(runs))
 
 
 def under_trace(*trees: Any) -> bool:
@@ -216,14 +263,18 @@ def under_trace(*trees: Any) -> bool:
 
 def _traced(fitness, solver, lower, upper, key, iterations, runs, args, dtype, batch
             ) -> Result:
-    """:func:`minimise` inside a caller's transformation: the same runs, traced."""
+    """:func:`minimise` inside a caller's transformation: the same runs, traced. The box's
+    values may be traced: ``lower < upper`` is checked when the program runs
+    (``equinox.error_if``)."""
     fitness, dtype = _check_common(fitness, solver, iterations, runs, args, dtype)
     lo, hi = jnp.asarray(lower, dtype), jnp.asarray(upper, dtype)
-    dim = getattr(fitness, "dim", None)
+    dim = fitness.dim
     if lo.ndim != 1 or hi.shape != lo.shape or (dim is not None and lo.shape[0] != dim):
         raise ValueError(f"bounds must be two 1-D arrays of one length"
                          f"{'' if dim is None else f' ({dim}, the fitness parameters)'}; "
                          f"got lower {lo.shape}, upper {hi.shape}")
+    lo = eqx.error_if(lo, jnp.any(~(lo < hi)), "minimise: the bounds need lower < upper "
+                      "everywhere (finite); a traced box has one where they do not")
     fitness, solver = _cast_all(dtype, fitness, solver)
     iterations = int(iterations)
 
@@ -233,11 +284,12 @@ def _traced(fitness, solver, lower, upper, key, iterations, runs, args, dtype, b
     if runs is None:
         return one(key)
     keys = jax.random.split(key, runs)
-    batch = _batching(batch, runs, False, run_bytes(solver, fitness, dim or lo.shape[0],
-                                                     dtype, iterations))
-    if batch == "vmap":
+    mode, _ = _batching(batch, runs, run_bytes(solver, fitness, lo.shape[0], dtype,
+                                               iterations), traced=True)
+    if mode == "vmap":
         return jax.vmap(one)(keys)
-    return jax.lax.map(one, keys, batch_size=batch if batch > 1 else None)
+    assert isinstance(mode, int)
+    return jax.lax.map(one, keys, batch_size=mode if mode > 1 else None)
 
 
 def time_one_of_many(fitness: FitnessLike, solver: AbstractSolver,
@@ -248,13 +300,13 @@ def time_one_of_many(fitness: FitnessLike, solver: AbstractSolver,
     ``minimise(..., runs=runs)`` uses, where that executable runs in sequence (a single
     CPU device), so timing one run costs no compilation of its own; elsewhere the
     single-run executable is compiled and timed."""
-    fn, static_key, call_args = _prepare(fitness, solver, lower, upper, key, iterations, runs,
-                                         None, dtype, True, "auto")
-    if static_key[2] != 1:
+    fn, config, static, call_args = _prepare(fitness, solver, lower, upper, key, iterations,
+                                             runs, None, dtype, "auto")
+    if config.batch != 1:
         r = minimise(fitness, solver, lower, upper, key=key, iterations=iterations,
                      dtype=dtype)
         return float(r.compile_s or 0.0), float(r.run_s or 0.0)
-    exe, compile_s = _compiled(fn, static_key, *call_args)
+    exe, compile_s = _COMPILED.get(fn, config, static, *call_args)
     one = (*call_args[:-1], jnp.int32(1))
     t0 = time.perf_counter()
     jax.block_until_ready(exe(*one))
@@ -264,14 +316,16 @@ def time_one_of_many(fitness: FitnessLike, solver: AbstractSolver,
 def minimise(fitness: FitnessLike, solver: AbstractSolver, lower: Float[ArrayLike, " d"],
              upper: Float[ArrayLike, " d"], *, key: PRNGKeyArray, iterations: int = 600,
              runs: int | None = None, args: Any = None, dtype: DTypeLike | None = None,
-             shard: bool = True, batch: Literal["auto", "vmap"] | int = "auto") -> Result:
+             batch: Literal["auto", "vmap", "shard"] | int = "auto") -> Result:
     """Minimise ``fitness`` over the box ``[lower, upper]`` with ``solver`` (a swarm,
     an :class:`~._external.Evosax` strategy, any :class:`~._solver.AbstractSolver`).
 
     Args:
-        fitness: a callable ``f(x, args) -> scalar`` (evaluated under ``vmap``) or an
-            :class:`~sedsabso_jax.L1Residual` (the paper's Eq. 17, evaluated through
-            ``W x``).
+        fitness: a callable ``f(x, args) -> scalar`` (optimistix's convention: ``x`` a 1-D
+            array, ``args`` whatever ``args`` below holds; evaluated under ``vmap``; a
+            fitness of one argument is refused before anything is traced), a
+            :class:`~sedsabso_jax.BlackBox` or an :class:`~sedsabso_jax.L1Residual` (the
+            paper's Eq. 17, evaluated through ``W x``).
         solver: the optimiser and its hyperparameters.
         lower: the box's lower corner, a 1-D array.
         upper: its upper corner, of the same length.
@@ -282,30 +336,33 @@ def minimise(fitness: FitnessLike, solver: AbstractSolver, lower: Float[ArrayLik
         args: passed to a callable fitness as its second argument.
         dtype: float64 or float32 for positions and the fitness data; None: float64 in
             JAX's 64-bit mode, else float32.
-        shard: spread the runs over the available devices.
-        batch: how the runs share the call: ``"vmap"`` (all at once), an integer k
-            (``lax.map`` over chunks of k vmapped runs) or ``"auto"``: in sequence on a
-            single CPU device (fastest to compile, and one run can be timed through the
-            same executable), otherwise vmapped, in the largest chunks that fit half the
-            device's memory when all at once would not; every choice gives the same
+        batch: how the runs share the call: ``"vmap"`` (all at once on one device), an
+            integer k (``lax.map`` over chunks of k vmapped runs on one device),
+            ``"shard"`` (vmapped, spread over every device with ``jax.sharding``), or
+            ``"auto"``: spread over the devices when there are several, otherwise in
+            sequence on a CPU (fastest to compile, and one run can be timed through the
+            same executable) or vmapped on an accelerator, in the largest chunks that fit
+            half its memory when all at once would not. Every choice gives the same
             numbers up to rounding. Runs that do not fit are a ValueError naming the
             limit, raised before anything compiles.
 
     Called from Python, the run is compiled ahead of time once per configuration and
-    cached, and :attr:`~._result.Result.compile_s` and ``run_s`` time it. Called inside
-    ``jax.jit`` or ``jax.vmap`` (over keys, boxes or ``args``), it is the same pure
-    computation traced into the caller's program and gives the same numbers to rounding;
-    there ``compile_s`` and ``run_s`` are None, ``shard`` is ignored, and the box is
-    checked for its shape only (its values may be traced). A single CPU device, outside
-    any trace, draws each phase's random numbers before its loop; traced, they are drawn
-    inside it (same numbers, slower on the CPU).
+    cached (the :data:`CACHE_SIZE` most recent; :func:`clear_compiled` empties it), and
+    :attr:`~._result.Result.compile_s` and ``run_s`` time it. Called inside ``jax.jit``
+    or ``jax.vmap`` (over keys, boxes or ``args``), it is the same pure computation
+    traced into the caller's program and gives the same numbers to rounding; there
+    ``compile_s`` and ``run_s`` are None, nothing is sharded, and the box's values may
+    be traced: a box with ``lower >= upper`` somewhere then fails when the program runs
+    (``equinox.error_if``), not before. A single CPU device, outside any trace, draws
+    each phase's random numbers before its loop; traced, they are drawn inside it (same
+    numbers, slower on the CPU).
     """
     if under_trace(key, lower, upper, args, fitness, solver):
         return _traced(fitness, solver, lower, upper, key, iterations, runs, args, dtype,
                        batch)
-    fn, static_key, call_args = _prepare(fitness, solver, lower, upper, key, iterations, runs,
-                                         args, dtype, shard, batch)
-    exe, compile_s = _compiled(fn, static_key, *call_args)
+    fn, config, static, call_args = _prepare(fitness, solver, lower, upper, key, iterations,
+                                             runs, args, dtype, batch)
+    exe, compile_s = _COMPILED.get(fn, config, static, *call_args)
     t0 = time.perf_counter()
     out = jax.block_until_ready(exe(*call_args))
     if runs is not None:

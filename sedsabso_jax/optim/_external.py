@@ -34,8 +34,8 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float, Int, PRNGKeyArray
 
 from ._fitness import finite_or_inf
+from ._population import check_population
 from ._solver import AbstractSolver, Bounds
-from ._swarm import check_population
 
 #: Strategies whose default population is CMA-ES's ``4 + floor(3 ln d)`` (Hansen's rule)
 #: rather than the swarms' 50.
@@ -60,8 +60,10 @@ def evosax_names() -> tuple[str, ...]:
 class EvosaxState(eqx.Module):
     """A run of an evosax strategy: the strategy's own state, the best point evaluated
     (in the box and in the unit cube the strategy sees), counts, and every generation's
-    key (split up front, as evosax's examples do). ``stage`` and ``pending`` are the
-    ask/tell bookkeeping."""
+    key (split up front, as evosax's examples do). ``pending`` holds the points of the
+    last ``ask`` (in the unit cube); ``round`` and ``asked`` where a loop of ``ask`` and
+    ``tell`` stands: -1 before a population-based strategy's initial population is told,
+    then 0; whether points were asked and wait for ``tell``."""
 
     strategy: Any
     best_u: Float[Array, " d"]
@@ -71,9 +73,10 @@ class EvosaxState(eqx.Module):
     n_nonfinite: Int[Array, ""]
     keys: Any  # (iterations,) generation keys
     t: Int[Array, ""]
-    k_init: Any = None
-    stage: str = eqx.field(static=True, default="ask")
-    pending: Any = None
+    k_init: Any
+    pending: Float[Array, "population d"]
+    round: int = eqx.field(static=True, default=0)
+    asked: bool = eqx.field(static=True, default=False)
 
 
 class Evosax(AbstractSolver):
@@ -171,38 +174,38 @@ class Evosax(AbstractSolver):
         k_init, k_pop, k_loop = jax.random.split(key, 3)
         keys = jax.random.split(k_loop, int(iterations))
         common = dict(best_f=jnp.asarray(jnp.inf, dtype), n_nonfinite=jnp.int32(0),
-                      keys=keys, t=jnp.int32(0))
+                      keys=keys, t=jnp.int32(0), k_init=k_init, n_evaluations=jnp.int32(0))
         if self.distribution_based:
             mean = jax.random.uniform(k_pop, (dim,), dtype)
             return EvosaxState(strategy=self._cast(strategy.init(k_init, mean, params), dtype),
                                best_u=mean, best_x=lower + (upper - lower) * mean,
-                               n_evaluations=jnp.int32(0), **common)
+                               pending=jnp.zeros((self.population(dim), dim), dtype), **common)
         u0 = jax.random.uniform(k_pop, (self.population(dim), dim), dtype)
         return EvosaxState(strategy=None, best_u=u0[0], best_x=lower + (upper - lower) * u0[0],
-                           n_evaluations=jnp.int32(0), k_init=k_init, stage="start",
-                           pending=u0, **common)
+                           pending=u0, round=-1, **common)
 
     def ask(self, state: EvosaxState, lower: Bounds, upper: Bounds
             ) -> tuple[Float[Array, "k d"], EvosaxState]:
-        if state.stage == "start":
-            u = state.pending
-            return lower + (upper - lower) * u, dataclasses.replace(state, stage="started")
-        if state.stage != "ask":
-            raise ValueError(f"{self.label}.ask: the state waits for tell (stage "
-                             f"{state.stage!r})")
+        if state.asked:
+            raise ValueError(f"{self.label}.ask: the state waits for tell (round "
+                             f"{state.round}); call tell with the last points' fitness")
+        if state.round < 0:  # the initial population, drawn by start
+            return lower + (upper - lower) * state.pending, dataclasses.replace(
+                state, asked=True)
         strategy, params = self._strategy(lower.shape[0], lower.dtype)
         k_ask, _ = jax.random.split(state.keys[state.t])
         u, s = strategy.ask(k_ask, state.strategy, params)
         u = jnp.clip(u, 0.0, 1.0)  # the clipped point is evaluated and told
         return lower + (upper - lower) * u, dataclasses.replace(
-            state, strategy=s, stage="tell", pending=u)
+            state, strategy=s, asked=True, pending=u.astype(state.pending.dtype))
 
     def tell(self, state: EvosaxState, fitness_values: Float[ArrayLike, " k"], lower: Bounds,
              upper: Bounds) -> EvosaxState:
         dim, dtype = lower.shape[0], lower.dtype
         u = state.pending
-        if state.stage not in ("started", "tell"):
-            raise ValueError(f"{self.label}.tell: no points were asked for; call ask first")
+        if not state.asked:
+            raise ValueError(f"{self.label}.tell: no points were asked for (round "
+                             f"{state.round}); call ask first")
         raw = jnp.asarray(fitness_values, dtype).reshape(-1)
         if raw.shape[0] != u.shape[0]:
             raise ValueError(f"{self.label}.tell: expected {u.shape[0]} fitness values (one "
@@ -211,7 +214,7 @@ class Evosax(AbstractSolver):
         bad = state.n_nonfinite + jnp.sum(~jnp.isfinite(raw), dtype=jnp.int32)
         strategy, params = self._strategy(dim, dtype)
         i = jnp.argmin(f)
-        if state.stage == "started":
+        if state.round < 0:
             s = strategy.init(state.k_init, u, f, params)
             best_u, best_f, t = u[i], f[i], state.t
         else:
@@ -225,7 +228,7 @@ class Evosax(AbstractSolver):
             state, strategy=self._cast(s, dtype), best_u=best_u,
             best_x=lower + (upper - lower) * best_u, best_f=best_f,
             n_evaluations=state.n_evaluations + u.shape[0], n_nonfinite=bad, t=t,
-            k_init=None, stage="ask", pending=None)
+            round=0, asked=False)
 
     def best(self, state: EvosaxState) -> tuple[Float[Array, " d"], Float[Array, ""]]:
         return state.best_x, state.best_f

@@ -16,7 +16,9 @@ float32 rounding on every backend.
 
 from __future__ import annotations
 
+import abc
 import hashlib
+import inspect
 from collections.abc import Callable
 from typing import Any, Protocol, TypeAlias
 
@@ -42,11 +44,67 @@ class _RegressorSource(Protocol):
     def regressor(self, q: Any, qd: Any, qdd: Any) -> Any: ...
 
 
-class BlackBox(eqx.Module):
+class AbstractFitness(eqx.Module):
+    """What the solvers evaluate: a fitness ``value(embed(x))`` with a linear ``embed``
+    (module docstring)."""
+
+    @property
+    @abc.abstractmethod
+    def dim(self) -> int | None:
+        """The number of parameters ``x`` has, or None where the fitness does not fix it."""
+
+    @property
+    @abc.abstractmethod
+    def rows(self) -> int | None:
+        """The size of ``embed(x)`` where it is larger than ``x`` (Eq. 17's residuals), or
+        None: what one evaluation's memory scales with."""
+
+    @abc.abstractmethod
+    def evaluate(self, X: Float[Array, "*batch d"]) -> Float[Array, "*batch"]:
+        """Raw fitness of every member (row) of ``X``."""
+
+    @abc.abstractmethod
+    def evaluate_with_antennae(self, X: Float[Array, "k d"], V: Float[Array, "k d"],
+                               a: Float[ArrayLike, ""]
+                               ) -> tuple[Float[Array, " k"], Float[Array, " k"], Int[Array, " k"]]:
+        """``(f(x), f(x + a v) - f(x - a v), the antennae's non-finite count)`` per member."""
+
+
+def check_arity(fn: Callable[..., Any]) -> None:
+    """A fitness is called ``fn(x, args)`` (optimistix's convention): refuse one that
+    cannot take two positional arguments, before anything is traced. A callable whose
+    signature Python cannot read is trusted."""
+    try:
+        signature = inspect.signature(fn)
+    except (TypeError, ValueError):
+        return
+    try:
+        signature.bind(None, None)
+    except TypeError:
+        name = getattr(fn, "__name__", type(fn).__name__)
+        raise TypeError(f"the fitness is called f(x, args) (optimistix's convention: args "
+                        f"is minimise's args=, None by default); {name}{signature} takes "
+                        f"other arguments: wrap it, e.g. lambda x, args: {name}(x)") from None
+
+
+class BlackBox(AbstractFitness):
     """Any scalar fitness ``fn(x, args)``; the population is evaluated under ``vmap``."""
 
     fn: Callable[[Array, Any], Array] = eqx.field(static=True)
     args: Any = None
+
+    def __check_init__(self) -> None:
+        if not callable(self.fn):
+            raise TypeError(f"fn must be callable f(x, args), got {type(self.fn).__name__}")
+        check_arity(self.fn)
+
+    @property
+    def dim(self) -> None:
+        return None
+
+    @property
+    def rows(self) -> None:
+        return None
 
     def embed(self, X: Float[Array, "*batch d"]) -> Float[Array, "*batch d"]:
         return X
@@ -85,7 +143,7 @@ class BlackBox(eqx.Module):
         return f[:n], finite_or_inf(fl) - finite_or_inf(fr), bad
 
 
-class L1Residual(eqx.Module):
+class L1Residual(AbstractFitness):
     """The paper's Eq. 17: ``f(p) = sum_i |W p - tau|_1`` over samples and joints.
 
     ``W`` is the stacked base regressor (Eq. 8), ``(m, d)`` with ``m = samples x joints``,
@@ -152,6 +210,10 @@ class L1Residual(eqx.Module):
     def dim(self) -> int:
         return self.W.shape[1]
 
+    @property
+    def rows(self) -> int:
+        return self.W.shape[0]
+
     def embed(self, X: Float[Array, "*batch d"]) -> Float[Array, "*batch m"]:
         """``X W^T``: the residuals' linear part for every member (row) of ``X``."""
         if X.ndim > 1 and X.shape[-2] <= FEW_ROWS:
@@ -208,10 +270,10 @@ class L1Residual(eqx.Module):
 
 #: What the solvers take as ``fitness``: a fitness object (:func:`as_fitness` makes one
 #: from a callable ``f(x, args)``).
-Fitness: TypeAlias = BlackBox | L1Residual
+Fitness: TypeAlias = AbstractFitness
 #: What :func:`~sedsabso_jax.minimise` takes as ``fitness``: a fitness object or a callable
 #: ``f(x, args) -> scalar``.
-FitnessLike: TypeAlias = Callable[[Array, Any], Array] | BlackBox | L1Residual
+FitnessLike: TypeAlias = Callable[[Array, Any], Array] | AbstractFitness
 
 #: Up to this many members a product reads ``W^T`` (:class:`L1Residual`).
 FEW_ROWS = 8
@@ -268,10 +330,11 @@ def _row_sum(A):
 
 def as_fitness(fitness: FitnessLike, args: Any = None) -> Fitness:
     """A fitness object from a callable ``f(x, args)`` or one of the classes above."""
-    if isinstance(fitness, (BlackBox, L1Residual)):
+    if isinstance(fitness, AbstractFitness):
         if args is not None:
             raise ValueError("args only go with a plain callable fitness")
         return fitness
     if callable(fitness):
         return BlackBox(fitness, args)
-    raise TypeError(f"fitness must be callable f(x, args) or an L1Residual, got {type(fitness)}")
+    raise TypeError(f"fitness must be a callable f(x, args), a BlackBox or an L1Residual, "
+                    f"got {type(fitness).__name__}")

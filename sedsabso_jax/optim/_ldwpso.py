@@ -11,25 +11,27 @@ from __future__ import annotations
 
 from typing import Any
 
-import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float, Int
 
-from ._solver import Bounds, is_concrete
-from ._swarm import (
-    AbstractSwarm,
+from .. import _deprecation
+from ._population import (
     SwarmState,
     check_population,
     check_velocity_update,
     evaluate,
+    replace,
     update_bests,
 )
+from ._solver import Bounds, is_concrete
+from ._swarm import AbstractSwarm
 
 
 class LDWPSO(AbstractSwarm):
     """PSO with inertia falling linearly from 0.9 to 0.4. Defaults: the paper's Sec. 5.2."""
 
-    n_particles: int = 50  # N: population size
+    population_size: int = 50  # N: population size
     c1: float = 2.0  # c1: cognitive coefficient
     c2: float = 2.0  # c2: social coefficient
     w_start: float = 0.9  # w(0): inertia at the first iteration
@@ -37,7 +39,7 @@ class LDWPSO(AbstractSwarm):
     vmax_fraction: float = 0.5  # Vmax = vmax_fraction * (upper - lower)
 
     def __check_init__(self) -> None:
-        check_population(self.n_particles, "n_particles")
+        check_population(self.population_size, "population_size")
         if is_concrete(self.c1, self.c2, self.vmax_fraction):
             check_velocity_update(self.c1, self.c2, self.vmax_fraction)
 
@@ -47,24 +49,35 @@ class LDWPSO(AbstractSwarm):
         return cls()
 
     @property
-    def n_slots(self) -> int:
-        return self.n_particles
+    def n_particles(self) -> int:
+        """Deprecated: :attr:`population_size`."""
+        _deprecation.warn("LDWPSO.n_particles", "LDWPSO.population_size")
+        return self.population_size
 
-    def move(self, s: SwarmState, draws: Any, lower: Bounds, upper: Bounds
-             ) -> tuple[Float[Array, "slots d"], Float[Array, "slots d"]]:
+    def vmax(self, lower: Bounds, upper: Bounds) -> Float[Array, " d"]:
+        return self.vmax_fraction * (upper - lower)
+
+    def evaluations(self, n_active: int | Int[np.ndarray, " t"]
+                    ) -> int | Int[np.ndarray, " t"]:
+        """One per particle."""
+        return n_active
+
+    def move(self, s: SwarmState, draws: Any, lower: Bounds, upper: Bounds) -> SwarmState:
         w = self.w_start - (self.w_start - self.w_end) * s.t / max(s.iterations - 1, 1)
         r1, r2 = draws
-        vmax = self.vmax_fraction * (upper - lower)
+        vmax = self.vmax(lower, upper)
         v = w * s.v + self.c1 * r1 * (s.pbest_x - s.x) + self.c2 * r2 * (s.guide_x - s.x)
         v = jnp.clip(v, -vmax, vmax)
-        return jnp.clip(s.x + v, lower, upper), v
+        return replace(s, x=jnp.clip(s.x + v, lower, upper), v=v)
 
     def absorb(self, s: SwarmState, raw: Float[Array, " slots"],
                diff: Float[Array, " slots"] | None = None,
                diff_bad: Int[Array, " slots"] | None = None) -> SwarmState:
         f, bad = evaluate(None, s.x, s.active, raw)
-        s = eqx.tree_at(lambda s: (s.n_evaluations, s.slot_nonfinite), s,
-                        (s.n_evaluations + jnp.sum(s.active, dtype=jnp.int32),
-                         s.slot_nonfinite + bad))
+        s = replace(s, n_evaluations=s.n_evaluations + jnp.sum(s.active, dtype=jnp.int32),
+                    slot_nonfinite=s.slot_nonfinite + bad)
         s, (gx, gf) = update_bests(s, s.x, f)
-        return eqx.tree_at(lambda s: (s.guide_x, s.guide_f), s, (gx, gf))
+        return replace(s, guide_x=gx, guide_f=gf)
+
+
+_deprecation.renamed_arguments(LDWPSO, {"n_particles": "population_size"})

@@ -1,7 +1,7 @@
 """SEDSABSO: BSO with simulated annealing on the global best and an exponentially
 shrinking population, the paper's Sec. 4.2 (Eq. 14-16).
 
-Each iteration runs BSO's update (:class:`~._bso.BeetleSwarm`), then ``q`` (``n_trials``)
+Each iteration runs BSO's update (:class:`~._bso.BeetleStep`), then ``q`` (``n_trials``)
 simulated-annealing trials on the swarm's global best ``P_g`` (Eq. 14,
 ``docs/explanation/paper-notes.md`` Sec. 4)::
 
@@ -13,8 +13,8 @@ for k = 1..q in turn, then ``T <- decay T``. The guide steers the velocities (Eq
 evaluated is kept apart and is what is reported: an accepted worse guide never replaces
 it. All q candidates perturb the same ``P_g``, so they are evaluated with one product;
 only the scalar Metropolis chain is sequential. Candidates are clipped to the search box
-(the paper leaves this open). Asked for points (``ask``/``tell``), an iteration is two
-rounds: the beetles' ``3 N(t)`` points, then the ``q`` candidates around the new ``P_g``.
+(the paper leaves this open). An iteration is two rounds (:mod:`._swarm`): the beetles'
+``3 N(t)`` points, then the ``q`` candidates around the new ``P_g``.
 
 Population (Eq. 15-16, decreasing form): ``N(t) = round(N_start exp(-(e_start + (e_end -
 e_start) t / (K - 1))))`` with the exponents ``e_start = Inf_min``, ``e_end = Inf_max`` of
@@ -34,13 +34,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 from jax.typing import DTypeLike
-from jaxtyping import Array, ArrayLike, Bool, Float, Int, PRNGKeyArray
+from jaxtyping import Array, Bool, Float, Int, PRNGKeyArray
 
 from .. import _deprecation
-from ._bso import BeetleSwarm
-from ._fitness import Fitness
+from ._bso import BeetleStep, absorb_beetles
+from ._population import SwarmState, check_population, evaluate, replace, swarm_best
+from ._random import uniforms
 from ._solver import Bounds, is_concrete
-from ._swarm import SwarmState, check_population, evaluate, replace, swarm_best, uniforms
+from ._swarm import AbstractSwarm
 
 
 def metropolis_accept(u: Float[Array, "*shape"] | float, f_new: Float[Array, "*shape"] | float,
@@ -60,10 +61,10 @@ def _integer(value: object, name: str, minimum: int) -> None:
         raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
 
 
-class SEDSABSO(BeetleSwarm):
+class SEDSABSO(AbstractSwarm):
     """BSO + simulated annealing on the guide + shrinking population. Defaults: Sec. 5.2."""
 
-    n_start: int = 90  # N_start: population at the first iteration (Eq. 15)
+    population_size: int = 90  # N_start: the initial population (Eq. 15)
     exponent_start: float = 0.3  # Inf_min: N(t) = N_start exp(-exponent(t)) at t = 0 (Eq. 16)
     exponent_end: float = 0.9  # Inf_max: the exponent at the last iteration (Eq. 16)
     n_trials: int = 3  # q: simulated-annealing trials on the guide per iteration (Eq. 14)
@@ -71,9 +72,10 @@ class SEDSABSO(BeetleSwarm):
     decay: float = 0.93  # T <- decay * T every iteration
     perturbation_scale: float = 1.0  # s in cand = g (1 + s r); 1.0 is Eq. 14 as printed
     n_phases: int = 4  # compiled phases of static population size (see module doc)
+    beetle: BeetleStep = BeetleStep()  # Eq. 10-13's hyperparameters
 
     def __check_init__(self) -> None:
-        check_population(self.n_start, "n_start")
+        check_population(self.population_size, "population_size")
         _integer(self.n_trials, "n_trials", 0)
         _integer(self.n_phases, "n_phases", 1)
         if not is_concrete(self.temperature, self.decay, self.exponent_start,
@@ -94,14 +96,14 @@ class SEDSABSO(BeetleSwarm):
         return cls()
 
     @property
-    def q(self) -> int:
-        """Deprecated: :attr:`n_trials` (q in the paper)."""
-        _deprecation.warn("SEDSABSO.q", "SEDSABSO.n_trials")
-        return self.n_trials
+    def n_start(self) -> int:
+        """Deprecated: :attr:`population_size` (N_start of Eq. 15)."""
+        _deprecation.warn("SEDSABSO.n_start", "SEDSABSO.population_size")
+        return self.population_size
 
     @property
-    def n_slots(self) -> int:
-        return self.n_start
+    def antenna(self) -> float:
+        return self.beetle.antenna
 
     @property
     def initial_temperature(self) -> float:
@@ -111,17 +113,26 @@ class SEDSABSO(BeetleSwarm):
     def asks_per_iteration(self) -> int:
         return 2 if self.n_trials else 1
 
+    def vmax(self, lower: Bounds, upper: Bounds) -> Float[Array, " d"]:
+        return self.beetle.vmax(lower, upper)
+
     def schedule(self, iterations: int) -> np.ndarray:
         """Eq. 15-16, decreasing: ``round(N_start exp(-e(t)))``, ``e`` linear from
         :attr:`exponent_start` to :attr:`exponent_end` over the iterations, at least 1."""
         t = np.arange(iterations) / max(iterations - 1, 1)
         e = self.exponent_start + (self.exponent_end - self.exponent_start) * t
-        return np.maximum(np.round(self.n_start * np.exp(-e)), 1).astype(int)
+        return np.maximum(np.round(self.population_size * np.exp(-e)), 1).astype(int)
 
     def evaluations(self, n_active: int | Int[np.ndarray, " t"]
                     ) -> int | Int[np.ndarray, " t"]:
         """BSO's three per beetle and the ``q`` annealing candidates (Eq. 14)."""
         return 3 * n_active + self.n_trials
+
+    def initial_pending(self, dim: int, dtype: DTypeLike) -> Any:
+        """Eq. 14's ``r`` (q x dim), the q Metropolis uniforms and the candidates: drawn
+        with the iteration, used by its annealing round."""
+        return (jnp.zeros((self.n_trials, dim), dtype), jnp.zeros(self.n_trials, dtype),
+                jnp.zeros((self.n_trials, dim), dtype))
 
     def randomness(self, key: PRNGKeyArray, dim: int, dtype: DTypeLike
                    ) -> tuple[PRNGKeyArray, Float[Array, "q d"], Float[Array, " q"]]:
@@ -140,45 +151,51 @@ class SEDSABSO(BeetleSwarm):
         k12, r, u = randomness
         return uniforms(k12, shape, dtype), r, u
 
-    def move(self, s: SwarmState, draws: Any, lower: Bounds, upper: Bounds
-             ) -> tuple[Float[Array, "slots d"], Float[Array, "slots d"]]:
-        return super().move(s, draws[0], lower, upper)
+    # ---------------------------------------------------- round 0: the beetles
+    def move(self, s: SwarmState, draws: Any, lower: Bounds, upper: Bounds) -> SwarmState:
+        """Eq. 10-13; the annealing round's draws kept for it."""
+        r12, r, u = draws
+        x, v = self.beetle.move(s, r12[0], r12[1], lower, upper)
+        return replace(s, x=x, v=v, pending=(r, u, jnp.zeros_like(r)))
 
     def absorb(self, s: SwarmState, raw: Float[Array, " slots"],
                diff: Float[Array, " slots"] | None, diff_bad: Int[Array, " slots"] | None
                ) -> SwarmState:
         """The beetles' update; the guide becomes the swarm's best ``P_g`` if that is
         better (without annealing trials, the temperature then cools)."""
-        s, _ = self._absorb_guided(s, raw, diff, diff_bad)
+        s, (gx, gf) = absorb_beetles(s, raw, diff, diff_bad)
+        swarm_better = gf < s.guide_f
+        s = replace(s, guide_x=jnp.where(swarm_better, gx, s.guide_x),
+                    guide_f=jnp.where(swarm_better, gf, s.guide_f))
         if self.n_trials == 0:  # no annealing: BSO with a shrinking population
             s = replace(s, temperature=s.temperature * self.decay)
         return s
 
-    def _absorb_guided(self, s: SwarmState, raw: Array, diff: Array | None,
-                       diff_bad: Array | None
-                       ) -> tuple[SwarmState, Array]:
-        """:meth:`absorb` without the cooling; also returns ``P_g``."""
-        s, (gx, gf) = self.absorb_beetles(s, raw, diff, diff_bad)
-        swarm_better = gf < s.guide_f
-        s = replace(s, guide_x=jnp.where(swarm_better, gx, s.guide_x),
-                    guide_f=jnp.where(swarm_better, gf, s.guide_f))
-        return s, gx
-
+    # ------------------------------------------------ round 1: the annealing trials
     def candidates(self, gx: Float[Array, " d"], r: Float[Array, "q d"], lower: Bounds,
                    upper: Bounds) -> Float[Array, "q d"]:
         """Eq. 14: ``clip(P_g (1 + s r_k), lower, upper)`` for the q rows of ``r``."""
         return jnp.clip(gx * (1.0 + self.perturbation_scale * r), lower, upper)
 
-    def accept(self, s: SwarmState, cand: Float[Array, "q d"], raw: Float[Array, " q"],
-               u: Float[Array, " q"]) -> SwarmState:
+    def propose_later(self, k: int, s: SwarmState, lower: Bounds, upper: Bounds
+                      ) -> SwarmState:
+        """Eq. 14's candidates around the swarm's best ``P_g`` after the beetles moved."""
+        r, u, _ = s.pending
+        return replace(s, pending=(r, u, self.candidates(swarm_best(s)[0], r, lower, upper)))
+
+    def later_points(self, k: int, s: SwarmState) -> Float[Array, "q d"]:
+        return s.pending[2]
+
+    def absorb_later(self, k: int, s: SwarmState, raw: Float[Array, " q"]) -> SwarmState:
         """The q candidates' Metropolis trials against the current guide, in turn (q is
         small: unrolled); the best ever kept apart; counts; the temperature cools."""
+        _, u, cand = s.pending
         fc, bad = evaluate(None, cand, raw=raw)
         guide_f, chosen, accepted = s.guide_f, jnp.int32(-1), s.sa_accepted
-        for k in range(self.n_trials):
-            ok = metropolis_accept(u[k], fc[k], guide_f, s.temperature)
-            guide_f = jnp.where(ok, fc[k], guide_f)
-            chosen = jnp.where(ok, k, chosen)
+        for j in range(self.n_trials):
+            ok = metropolis_accept(u[j], fc[j], guide_f, s.temperature)
+            guide_f = jnp.where(ok, fc[j], guide_f)
+            chosen = jnp.where(ok, j, chosen)
             accepted = accepted + ok.astype(jnp.int32)
         gx = jnp.where(chosen >= 0, cand[jnp.maximum(chosen, 0)], s.guide_x)
         i = jnp.argmin(fc)
@@ -190,48 +207,5 @@ class SEDSABSO(BeetleSwarm):
             n_evaluations=s.n_evaluations + self.n_trials,
             temperature=s.temperature * self.decay)
 
-    def update(self, fitness: Fitness, state: SwarmState, draws: Any, lower: Bounds,
-               upper: Bounds) -> SwarmState:
-        """The beetles' iteration (Eq. 10-13), then ``q`` annealing trials on ``P_g``
-        (Eq. 14), with the given draws."""
-        _, r, u = draws
-        x, v = self.move(state, draws, lower, upper)
-        raw, diff, diff_bad = self.evaluate_moved(fitness, x, v)
-        state = replace(state, x=x, v=v)
-        if self.n_trials == 0:
-            return self.finish(self.absorb(state, raw, diff, diff_bad))
-        state, gx = self._absorb_guided(state, raw, diff, diff_bad)
-        cand = self.candidates(gx, r, lower, upper)
-        return self.finish(self.accept(state, cand, fitness.evaluate(cand), u))
 
-    def after_evaluate(self, state: SwarmState) -> SwarmState:
-        if self.n_trials == 0:
-            return self.finish(state)
-        return replace(state, stage="anneal")
-
-    def ask(self, state: SwarmState, lower: Bounds, upper: Bounds
-            ) -> tuple[Float[Array, "k d"], SwarmState]:
-        if state.stage != "anneal":
-            return super().ask(state, lower, upper)
-        _, r, u = state.pending
-        gx, _ = swarm_best(state)
-        cand = self.candidates(gx, r, lower, upper)
-        return cand, replace(state, stage="accept", pending=(u, cand))
-
-    def tell(self, state: SwarmState, fitness_values: Float[ArrayLike, " k"], lower: Bounds,
-             upper: Bounds) -> SwarmState:
-        if state.stage == "anneal":
-            raise ValueError("SEDSABSO.tell: the annealing candidates were not asked for; "
-                             "call ask first")
-        if state.stage != "accept":
-            return super().tell(state, fitness_values, lower, upper)
-        u, cand = state.pending
-        values = jnp.asarray(fitness_values, state.x.dtype).reshape(-1)
-        if values.shape[0] != self.n_trials:
-            raise ValueError(f"SEDSABSO.tell: expected {self.n_trials} fitness values (the "
-                             f"annealing candidates asked for), got {values.shape[0]}")
-        return self.finish(self.accept(state, cand, values, u))
-
-
-_deprecation.renamed_arguments(SEDSABSO, {"q": "n_trials", "f_min": "exponent_start",
-                                          "f_max": "exponent_end"})
+_deprecation.renamed_arguments(SEDSABSO, {"n_start": "population_size"})

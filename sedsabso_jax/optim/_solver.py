@@ -14,18 +14,20 @@ pytree, so it composes under ``jax.jit`` and ``jax.vmap``:
 - :meth:`~AbstractSolver.best` (the best point evaluated so far and its fitness),
   :meth:`~AbstractSolver.n_evaluations`, :attr:`~AbstractSolver.label`;
 - :meth:`~AbstractSolver.run`: a whole run as a :class:`~._result.Result`, what
-  :func:`~sedsabso_jax.minimise` calls for each key. The default is ``init`` then a
-  ``lax.scan`` of ``step``; a solver may override it with a faster schedule that gives
-  the same numbers (the swarms shrink their arrays with the population, ``swarm.py``).
+  :func:`~sedsabso_jax.minimise` calls for each key: ``init``, then ``step`` in a
+  ``lax.scan`` (the swarms cut their arrays to the population of each phase of the
+  run, ``_swarm.py``).
 
-A one-iteration loop written with these (``init`` then ``iterations`` calls of
-``step``) gives the numbers :func:`~sedsabso_jax.minimise` gives, up to floating-point
-rounding (``tests/test_composition.py``).
+``step`` is the rounds of ``ask``, evaluate, ``tell`` that make an iteration: a loop
+written with ``init`` and ``step``, or with ``start``, ``ask`` and ``tell``, gives the
+numbers :func:`~sedsabso_jax.minimise` gives, up to floating-point rounding
+(``tests/test_composition.py``).
 """
 
 from __future__ import annotations
 
 import abc
+import dataclasses
 from typing import Any
 
 import equinox as eqx
@@ -34,7 +36,6 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int, PRNGKeyArray
 
-from .. import _deprecation
 from ._fitness import Fitness
 from ._result import Result
 
@@ -116,10 +117,10 @@ class AbstractSolver(eqx.Module):
         initial population and is not counted). Default 1."""
         return 1
 
-    def check(self) -> None:
-        """Deprecated: a solver's hyperparameters are checked when it is built."""
-        _deprecation.warn(f"{type(self).__name__}.check()",
-                          "nothing: hyperparameters are checked when the solver is built")
+    def hyperparameters(self) -> dict[str, Any]:
+        """The solver's settings by name, those of settings objects it holds (a swarm's
+        :class:`~._bso.BeetleStep`) first: what reports write."""
+        return _settings_of(self)
 
     def init(self, fitness: Fitness, lower: Bounds, upper: Bounds, key: PRNGKeyArray,
              iterations: int) -> State:
@@ -145,10 +146,12 @@ class AbstractSolver(eqx.Module):
         return state
 
     def run(self, fitness: Fitness, lower: Bounds, upper: Bounds, key: PRNGKeyArray,
-            iterations: int) -> Result:
+            iterations: int, *, predraw: bool = False) -> Result:
         """One whole run (pure): :meth:`init`, then ``iterations`` :meth:`step` in a
-        ``lax.scan``; the best fitness is recorded after each. Timings are ``None``:
-        :func:`~sedsabso_jax.minimise` measures them outside any trace."""
+        ``lax.scan``; the best fitness is recorded after each. ``predraw``: the caller
+        (the driver, for a run compiled on its own on the CPU) lets the solver make its
+        random draws before its loops, the same numbers (the swarms do). Timings are
+        ``None``: :func:`~sedsabso_jax.minimise` measures them outside any trace."""
         iterations = int(iterations)
 
         def body(state: State, _: None) -> tuple[State, Float[Array, ""]]:
@@ -170,6 +173,18 @@ class AbstractSolver(eqx.Module):
                       sa_accepted=self.sa_accepted(state),
                       n_evaluations=self.n_evaluations(state),
                       n_nonfinite=self.n_nonfinite(state))
+
+
+def _settings_of(module: eqx.Module) -> dict[str, Any]:
+    nested: dict[str, Any] = {}
+    own: dict[str, Any] = {}
+    for field in dataclasses.fields(module):
+        value = getattr(module, field.name)
+        if isinstance(value, eqx.Module):
+            nested.update(_settings_of(value))
+        else:
+            own[field.name] = value
+    return {**nested, **own}
 
 
 def is_concrete(*values: Any) -> bool:

@@ -54,7 +54,6 @@ from ..optim._box import box_around
 from ..optim._driver import minimise, time_one_of_many
 from ..optim._fitness import L1Residual
 from ..optim._registry import SWARMS, paper_solver
-from ..optim._swarm import phases
 
 SCENARIOS = ("paper", "prior")
 BASELINES = ("OLS", "LM", "L1-LP")
@@ -203,7 +202,7 @@ def run(settings: Settings = Settings(), progress: Callable[[str, int, int], Non
         x, f = np.asarray(many.x, float), np.asarray(many.f, float)
         hf = np.asarray(many.history_f, float)
         history_f[name], history_n[name] = hf, np.asarray(many.history_n[0])
-        phase_slots[name] = phases(history_n[name], solver.n_phases)
+        phase_slots[name] = list(solver.plan(settings.iterations).phases)
         algorithms[name] = {
             "fitness_mean": float(f.mean()), "fitness_std": float(f.std()),
             "fitness_runs": f.tolist(),
@@ -263,7 +262,7 @@ def _box_rule(scenario: str) -> str:
 
 
 def _fields(solver) -> dict:
-    return jsonable({f.name: getattr(solver, f.name) for f in dataclasses.fields(solver)})
+    return jsonable(solver.hyperparameters())
 
 
 def _versions() -> dict:
