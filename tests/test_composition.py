@@ -1,7 +1,8 @@
 """The optimisers compose like optimistix's and evosax's: ``minimise`` inside ``jax.jit`` and
 ``jax.vmap`` (over keys, over the fitness's ``args``, over boxes, over data) is the same
-computation as outside, and a loop the user owns (``init``/``step`` or ``ask``/``tell``)
-gives the same numbers. Small budgets; every solver of the contract."""
+computation as outside (a loop the user owns, ``init``/``step`` or ``ask``/``tell``, gives
+the same numbers: ``tests/test_solver_paths.py``). Small budgets; every solver of the
+contract."""
 
 from __future__ import annotations
 
@@ -92,46 +93,6 @@ def test_vmap_over_data_of_eq_17():
     expected = [float(sj.minimise(sj.L1Residual(W, t), solver, -np.ones(3), np.ones(3),
                                   key=key, iterations=K).f) for t in np.asarray(taus)]
     np.testing.assert_allclose(traced, expected, rtol=1e-9)
-
-
-@pytest.mark.parametrize("solver", SOLVERS, ids=IDS)
-def test_a_loop_the_user_owns_gives_minimise_numbers(solver):
-    """``init`` + ``step`` (the fitness called by the solver) and ``start`` + ``ask`` /
-    ``tell`` (the user evaluates the points) reproduce ``minimise``'s run; SEDSABSO's
-    step keeps every slot where ``minimise`` cuts them, and the numbers still agree."""
-    fitness = sj.BlackBox(rosenbrock)
-    lo, hi = jnp.asarray(LO), jnp.asarray(HI)
-    key = jax.random.key(11)
-
-    @jax.jit
-    def with_step(key):
-        state = solver.init(fitness, lo, hi, key, K)
-        state = jax.lax.fori_loop(0, K, lambda i, s: solver.step(fitness, s, lo, hi), state)
-        return solver.best(state), solver.n_evaluations(state)
-
-    @jax.jit
-    def with_ask_tell(key):
-        def round_(state):
-            points, state = solver.ask(state, lo, hi)
-            return solver.tell(state, jax.vmap(rosenbrock)(points), lo, hi)
-
-        state = solver.start(lo, hi, key, K)
-        for _ in range(solver.initial_asks):
-            state = round_(state)
-
-        def iteration(i, state):
-            for _ in range(solver.asks_per_iteration):
-                state = round_(state)
-            return state
-
-        state = jax.lax.fori_loop(0, K, iteration, state)
-        return solver.best(state), solver.n_evaluations(state)
-
-    reference = sj.minimise(rosenbrock, solver, LO, HI, key=key, iterations=K)
-    for (x, f), n in (with_step(key), with_ask_tell(key)):
-        np.testing.assert_allclose(f, reference.f, rtol=1e-9)
-        np.testing.assert_allclose(x, reference.x, rtol=1e-9, atol=1e-12)
-        assert int(n) == int(reference.n_evaluations)
 
 
 def test_ask_and_tell_refuse_the_wrong_order():
