@@ -62,15 +62,38 @@ def blocks(path: Path, lang: str) -> list[tuple[int, str, bool]]:
 
 
 # ----------------------------------------------------------------------------- the build
+def build(config: Path, out: Path, cwd: Path = ROOT) -> subprocess.CompletedProcess:
+    """``mkdocs build --strict`` of ``config`` into ``out``, at mkdocs' own log level: with
+    ``--quiet`` mkdocs 1.6 neither shows warnings nor counts them for ``--strict``, so a
+    quiet strict build passes with broken links (``test_a_broken_link_fails_the_build``)."""
+    return subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict",
+                           "-f", str(config), "-d", str(out)],
+                          cwd=cwd, capture_output=True, text=True, timeout=600,
+                          env={**os.environ, "NO_MKDOCS_2_WARNING": "1"})
+
+
 @pytest.fixture(scope="module")
 def site(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("site")
-    run = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--quiet",
-                          "-f", str(ROOT / "mkdocs.yml"), "-d", str(out)],
-                         cwd=ROOT, capture_output=True, text=True, timeout=600,
-                         env={**os.environ, "NO_MKDOCS_2_WARNING": "1"})
+    run = build(ROOT / "mkdocs.yml", out)
     assert run.returncode == 0, f"mkdocs build --strict failed:\n{run.stdout}\n{run.stderr}"
+    assert "WARNING" not in run.stderr, run.stderr
     return out
+
+
+def test_a_broken_link_fails_the_build(tmp_path):
+    """A planted broken link fails :func:`build` (and would pass with ``--quiet``)."""
+    (tmp_path / "docs").mkdir()
+    (tmp_path / "docs" / "index.md").write_text("# Home\n\n[gone](nowhere.md)\n")
+    config = tmp_path / "mkdocs.yml"
+    config.write_text("site_name: planted\nvalidation:\n  unrecognized_links: warn\n")
+    run = build(config, tmp_path / "site", cwd=tmp_path)
+    assert run.returncode != 0 and "nowhere.md" in run.stderr, run.stderr
+    quiet = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--quiet",
+                            "-f", str(config), "-d", str(tmp_path / "quiet")], cwd=tmp_path,
+                           capture_output=True, text=True, timeout=600,
+                           env={**os.environ, "NO_MKDOCS_2_WARNING": "1"})
+    assert quiet.returncode == 0  # why the build above must not be quiet
 
 
 def inventory(path: Path) -> set[str]:
