@@ -21,6 +21,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.experimental import multihost_utils
 from jax.typing import DTypeLike
 from jaxtyping import Array, ArrayLike, Float, Int, PRNGKeyArray
 
@@ -241,16 +242,26 @@ def _prepare(fitness, solver, lower, upper, key, iterations, runs, args, dtype, 
     config = RunConfig(int(iterations), batch=mode, predraw=cpu and mode == 1)
     keys = jax.random.split(key, runs)
     if sharded:
-        devices = jax.devices()
-        # pad the runs to a multiple of the device count; the extra runs are dropped
-        padded = math.ceil(runs / len(devices)) * len(devices)
-        if padded > runs:
-            extra = jax.random.split(jax.random.fold_in(key, 1), padded - runs)
-            keys = jnp.concatenate([keys, extra])
-        mesh = jax.sharding.Mesh(np.array(devices), ("runs",))
-        spec = jax.sharding.PartitionSpec("runs")
-        keys = jax.device_put(keys, jax.sharding.NamedSharding(mesh, spec))
+        keys = _sharded_keys(key, keys)
     return _run_many, config, static, (dyn, fitness, lo, hi, keys, jnp.int32(runs))
+
+
+def _sharded_keys(key: PRNGKeyArray, keys: PRNGKeyArray) -> PRNGKeyArray:
+    """``keys`` padded to a multiple of the device count (the extra runs are dropped
+    afterwards) and spread over every device of every process (``jax.devices()``: the
+    global devices after ``jax.distributed.initialize``), each process placing the shards
+    of its own devices: every process computes the same keys from the same seed."""
+    devices = jax.devices()
+    runs = keys.shape[0]
+    padded = math.ceil(runs / len(devices)) * len(devices)
+    if padded > runs:
+        extra = jax.random.split(jax.random.fold_in(key, 1), padded - runs)
+        keys = jnp.concatenate([keys, extra])
+    mesh = jax.sharding.Mesh(np.array(devices), ("runs",))
+    data = np.asarray(jax.random.key_data(keys))
+    sharding = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("runs", None))
+    spread = jax.make_array_from_callback(data.shape, sharding, lambda index: data[index])
+    return jax.random.wrap_key_data(spread, impl=jax.random.key_impl(keys))
 
 
 def under_trace(*trees: Any) -> bool:
@@ -365,6 +376,8 @@ def minimise(fitness: FitnessLike, solver: AbstractSolver, lower: Float[ArrayLik
     exe, compile_s = _COMPILED.get(fn, config, static, *call_args)
     t0 = time.perf_counter()
     out = jax.block_until_ready(exe(*call_args))
+    if jax.process_count() > 1:  # runs on other hosts' devices: every process gets them all
+        out = multihost_utils.process_allgather(out, tiled=True)
     if runs is not None:
         out = jax.tree.map(lambda o: o[:runs], out)
     run_s = time.perf_counter() - t0
