@@ -33,15 +33,9 @@ import numpy as np
 from jaxtyping import Array, Float, Int
 
 from .. import _deprecation
-from ._population import (
-    SwarmState,
-    check_population,
-    check_velocity_update,
-    evaluate,
-    replace,
-    update_bests,
-)
-from ._solver import Bounds, is_concrete
+from ._checks import check_population, check_velocity_update, is_concrete
+from ._population import SwarmState, absorb_positions, replace
+from ._solver import Bounds
 from ._swarm import AbstractSwarm
 
 
@@ -101,13 +95,8 @@ def absorb_beetles(s: SwarmState, raw: Float[Array, " slots"],
     """The moved beetles' fitness and antennae taken in: personal and best-ever updated;
     returns the state and the swarm's global best ``(x, f)`` among the active slots (the
     guide is the swarm's own)."""
-    f, bad = evaluate(None, s.x, s.active, raw)
-    bad = s.slot_nonfinite + bad + jnp.where(s.active, s.antennae_bad, 0)
-    n_active = jnp.sum(s.active, dtype=jnp.int32)
-    s = eqx.tree_at(
-        lambda s: (s.antennae, s.antennae_bad, s.n_evaluations, s.slot_nonfinite), s,
-        (diff, diff_bad, s.n_evaluations + 3 * n_active, bad))
-    return update_bests(s, s.x, f)
+    s, best = absorb_positions(s, raw, 3, jnp.where(s.active, s.antennae_bad, 0))
+    return replace(s, antennae=diff, antennae_bad=diff_bad), best
 
 
 class BSO(AbstractSwarm):
@@ -117,7 +106,7 @@ class BSO(AbstractSwarm):
     beetle: BeetleStep = BeetleStep()  # Eq. 10-13's hyperparameters
 
     def __check_init__(self) -> None:
-        check_population(self.population_size, "population_size")
+        check_population(self.population_size)
 
     @classmethod
     def paper(cls) -> BSO:

@@ -33,8 +33,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float, Int, PRNGKeyArray
 
+from ._checks import check_population
 from ._fitness import finite_or_inf
-from ._population import check_population
 from ._solver import AbstractSolver, Bounds
 
 #: Strategies whose default population is CMA-ES's ``4 + floor(3 ln d)`` (Hansen's rule)

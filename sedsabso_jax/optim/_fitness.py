@@ -210,10 +210,6 @@ class L1Residual(AbstractFitness):
     def dim(self) -> int:
         return self.W.shape[1]
 
-    @property
-    def rows(self) -> int:
-        return self.W.shape[0]
-
     def embed(self, X: Float[Array, "*batch d"]) -> Float[Array, "*batch m"]:
         """``X W^T``: the residuals' linear part for every member (row) of ``X``."""
         if X.ndim > 1 and X.shape[-2] <= FEW_ROWS:
@@ -236,6 +232,11 @@ class L1Residual(AbstractFitness):
 
     def __call__(self, x: Float[Array, " d"]) -> Float[Array, ""]:
         return self.value(self.embed(x))
+
+    @property
+    def rows(self) -> int:
+        """``m``: the residuals of one evaluation."""
+        return self.tau.shape[0]
 
     def antenna_difference(self, E: Float[Array, "*batch m"], G: Float[Array, "*batch m"],
                            a: Float[ArrayLike, ""]

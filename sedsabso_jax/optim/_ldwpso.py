@@ -16,15 +16,9 @@ import numpy as np
 from jaxtyping import Array, Float, Int
 
 from .. import _deprecation
-from ._population import (
-    SwarmState,
-    check_population,
-    check_velocity_update,
-    evaluate,
-    replace,
-    update_bests,
-)
-from ._solver import Bounds, is_concrete
+from ._checks import check_population, check_velocity_update, is_concrete
+from ._population import SwarmState, absorb_positions, replace
+from ._solver import Bounds
 from ._swarm import AbstractSwarm
 
 
@@ -39,7 +33,7 @@ class LDWPSO(AbstractSwarm):
     vmax_fraction: float = 0.5  # Vmax = vmax_fraction * (upper - lower)
 
     def __check_init__(self) -> None:
-        check_population(self.population_size, "population_size")
+        check_population(self.population_size)
         if is_concrete(self.c1, self.c2, self.vmax_fraction):
             check_velocity_update(self.c1, self.c2, self.vmax_fraction)
 
@@ -73,10 +67,7 @@ class LDWPSO(AbstractSwarm):
     def absorb(self, s: SwarmState, raw: Float[Array, " slots"],
                diff: Float[Array, " slots"] | None = None,
                diff_bad: Int[Array, " slots"] | None = None) -> SwarmState:
-        f, bad = evaluate(None, s.x, s.active, raw)
-        s = replace(s, n_evaluations=s.n_evaluations + jnp.sum(s.active, dtype=jnp.int32),
-                    slot_nonfinite=s.slot_nonfinite + bad)
-        s, (gx, gf) = update_bests(s, s.x, f)
+        s, (gx, gf) = absorb_positions(s, raw, 1)
         return replace(s, guide_x=gx, guide_f=gf)
 
 

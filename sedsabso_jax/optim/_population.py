@@ -11,7 +11,6 @@ from typing import Any
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jaxtyping import Array, ArrayLike, Bool, Float, Int, PRNGKeyArray
 
 from ._fitness import Fitness, finite_or_inf
@@ -154,6 +153,19 @@ def update_bests(state: SwarmState, x: Float[Array, "slots d"], f: Float[Array, 
     ), (pbest_x[i], masked[i])
 
 
+def absorb_positions(state: SwarmState, raw: Float[Array, " slots"], evaluations: int,
+                     extra_bad: Int[ArrayLike, " slots"] = 0
+                     ) -> tuple[SwarmState, tuple[Float[Array, " d"], Float[Array, ""]]]:
+    """The moved population's raw fitness taken in (``evaluations`` per active member;
+    its non-finite values, and ``extra_bad`` more, counted per slot), then
+    :func:`update_bests`."""
+    f, bad = evaluate(None, state.x, state.active, raw)
+    n_active = jnp.sum(state.active, dtype=jnp.int32)
+    state = replace(state, n_evaluations=state.n_evaluations + evaluations * n_active,
+                    slot_nonfinite=state.slot_nonfinite + bad + extra_bad)
+    return update_bests(state, state.x, f)
+
+
 def swarm_best(state: SwarmState) -> tuple[Float[Array, " d"], Float[Array, ""]]:
     """The swarm's global best ``(x, f)`` among the active slots' personal bests."""
     masked = jnp.where(state.active, state.pbest_f, jnp.inf)
@@ -199,17 +211,3 @@ def reorder(state: SwarmState, slots: Int[ArrayLike, ""]) -> SwarmState:
     order, state = _best_first(state, n)
     state = _per_slot(state, order)
     return eqx.tree_at(lambda s: s.active, state, state.active & (jnp.arange(n) < slots))
-
-
-def check_population(n: object, name: str) -> None:
-    """A population size must be an integer >= 1."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise ValueError(f"{name} must be an integer >= 1, got {n!r}")
-
-
-def check_velocity_update(c1: float, c2: float, vmax_fraction: float) -> None:
-    """The velocity update's coefficients: ``c1, c2 >= 0`` and ``vmax_fraction > 0``."""
-    if vmax_fraction <= 0:
-        raise ValueError(f"vmax_fraction must be > 0, got {vmax_fraction}")
-    if c1 < 0 or c2 < 0:
-        raise ValueError(f"c1 and c2 must be >= 0, got c1={c1}, c2={c2}")

@@ -38,9 +38,10 @@ from jaxtyping import Array, Bool, Float, Int, PRNGKeyArray
 
 from .. import _deprecation
 from ._bso import BeetleStep, absorb_beetles
-from ._population import SwarmState, check_population, evaluate, replace, swarm_best
+from ._checks import check_integer, check_population, is_concrete
+from ._population import SwarmState, evaluate, replace, swarm_best
 from ._random import uniforms
-from ._solver import Bounds, is_concrete
+from ._solver import Bounds
 from ._swarm import AbstractSwarm
 
 
@@ -54,11 +55,6 @@ def metropolis_accept(u: Float[Array, "*shape"] | float, f_new: Float[Array, "*s
     is never accepted (``exp(-inf) = 0``; ``inf - inf`` gives NaN, which compares false).
     """
     return jnp.exp(-(f_new - f_old) / temperature) > u
-
-
-def _integer(value: object, name: str, minimum: int) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
 
 
 class SEDSABSO(AbstractSwarm):
@@ -75,9 +71,9 @@ class SEDSABSO(AbstractSwarm):
     beetle: BeetleStep = BeetleStep()  # Eq. 10-13's hyperparameters
 
     def __check_init__(self) -> None:
-        check_population(self.population_size, "population_size")
-        _integer(self.n_trials, "n_trials", 0)
-        _integer(self.n_phases, "n_phases", 1)
+        check_population(self.population_size)
+        check_integer(self.n_trials, "n_trials", 0)
+        check_integer(self.n_phases, "n_phases", 1)
         if not is_concrete(self.temperature, self.decay, self.exponent_start,
                            self.exponent_end):
             return

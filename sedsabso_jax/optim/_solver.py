@@ -185,9 +185,3 @@ def _settings_of(module: eqx.Module) -> dict[str, Any]:
         else:
             own[field.name] = value
     return {**nested, **own}
-
-
-def is_concrete(*values: Any) -> bool:
-    """Whether every value is concrete (not a tracer): hyperparameters given as traced
-    arrays (a ``vmap`` over a hyperparameter) are checked only where they are concrete."""
-    return not any(isinstance(v, jax.core.Tracer) for v in jax.tree.leaves(values))
