@@ -89,7 +89,7 @@ BUGS = [
     ("optim/_bso.py",
      "return jnp.clip(s.x + self.lam * v + (1.0 - self.lam) * xi, lower, upper)",
      "return s.x + self.lam * v + (1.0 - self.lam) * xi", "no box clip in BSO", SWARMS, None),
-    ("optim/_bso.py", "s.n_evaluations + 3 * n_active", "s.n_evaluations + 2 * n_active",
+    ("optim/_bso.py", "absorb_positions(s, raw, 3,", "absorb_positions(s, raw, 2,",
      "BSO counts two evaluations per beetle, not three", SWARMS, None),
     ("optim/_ldwpso.py", "s.t / max(s.iterations - 1, 1)", "s.t / s.iterations",
      "LDWPSO's inertia never reaches w_end", SWARMS, None),
