@@ -16,12 +16,13 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Iterable, Sequence
-from typing import Any, ClassVar
+from typing import Any, ClassVar, cast
 
 import equinox as eqx
 
 from ..dynamics._robot import Robot
 from ..measurements._container import Measurements
+from ._estimators import PhysicallyConsistent
 from ._fitting import Estimator, Limits, ProgressCallback, Sigma
 from ._identify import Data, identify, model_of, one_or_more, recordings_of
 from ._model import TorqueModel, candidate_models
@@ -164,7 +165,8 @@ class Choice(eqx.Module):
         if self.physical is False or (self.physical is None and self.validation is None):
             return estimators
         if self.physical:
-            physical = tuple(e.physically_consistent() for e in estimators)
+            physical = tuple(cast(PhysicallyConsistent, e.physically_consistent())
+                             for e in estimators)
             if isinstance(self.prior_strength, str):  # "cv": chosen after the model
                 return physical
             return tuple(dataclasses.replace(e, prior_strength=self.prior_strength)

@@ -12,7 +12,7 @@ and :mod:`._box_search` have them all). A final class that sets ``registered_as 
 import abc
 import dataclasses
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any, ClassVar, TypeAlias
+from typing import Any, ClassVar, TypeAlias
 
 import equinox as eqx
 import numpy as np
@@ -21,9 +21,6 @@ from jaxtyping import ArrayLike, Float
 from .._deprecation import caller_stacklevel
 from ..optim._linear import Factorization, factorize
 from ._model import TorqueModel
-
-if TYPE_CHECKING:
-    from ._estimators import PhysicallyConsistent
 
 #: How rows are weighted: each joint's rows divided by its standard deviation sigma.
 WEIGHTINGS = ("equal", "residual", "limits", "given")
@@ -252,7 +249,7 @@ class Estimator(eqx.Module):
         ``physical``, ``weights`` and the estimator's own)."""
 
     @abc.abstractmethod
-    def physically_consistent(self) -> "PhysicallyConsistent":
+    def physically_consistent(self) -> "Estimator":
         """This fit over parameters a real body can have: a least-squares fit's
         :class:`~._estimators.PhysicallyConsistent` form (itself if it is one); a
         ValueError naming the estimator for the others."""

@@ -21,15 +21,14 @@ the order of its columns). :func:`parse_friction` reads that text, once, at the 
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 import abc
 import dataclasses
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar, Protocol
 
 import equinox as eqx
 import numpy as np
 
+from ..dynamics._base_parameters import BaseParameters
+from ..dynamics._robot import Robot
 from ._options import as_float, check_number
-
-if TYPE_CHECKING:
-    from ._model import TorqueModel
 
 #: The rigid-body model's own friction, always in the model (the base regressor's columns).
 BASE_FRICTION = "viscous-coulomb"
@@ -37,6 +36,25 @@ BASE_FRICTION = "viscous-coulomb"
 SMOOTH_VELOCITY = 0.02
 #: Term name -> final class, in column order (each class registers itself when defined).
 _TERMS: dict[str, type["AbstractTerm"]] = {}
+
+
+class TorqueModelView(Protocol):
+    """What a term reads of its torque model (:class:`~._model.TorqueModel`)."""
+
+    @property
+    def robot(self) -> Robot: ...
+
+    @property
+    def base(self) -> BaseParameters: ...
+
+    @property
+    def recordings(self) -> int: ...
+
+    @property
+    def motor_matrix(self) -> np.ndarray: ...
+
+    @property
+    def coupled_motors(self) -> tuple[int, ...]: ...
 
 
 class AbstractTerm(eqx.Module):
@@ -55,12 +73,12 @@ class AbstractTerm(eqx.Module):
             _TERMS[cls.name] = cls
 
     @abc.abstractmethod
-    def names(self, model: "TorqueModel") -> tuple[str, ...]:
+    def names(self, model: TorqueModelView) -> tuple[str, ...]:
         """The names of this term's columns in ``model`` (a ValueError where the term does
         not apply to the model)."""
 
     @abc.abstractmethod
-    def columns(self, model: "TorqueModel", qd: np.ndarray, qdd: np.ndarray,
+    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
                 recording: np.ndarray | None) -> np.ndarray:
         """The columns ``(..., n, len(names))`` at velocities and accelerations ``(..., n)``
         (``recording``: each sample's recording, or None)."""
@@ -101,13 +119,13 @@ class Offset(AbstractTerm):
     name: ClassVar[str] = "offset"
     nonnegative: ClassVar[bool] = False
 
-    def names(self, model: "TorqueModel") -> tuple[str, ...]:
+    def names(self, model: TorqueModelView) -> tuple[str, ...]:
         n, R = model.robot.n_joints, model.recordings
         if R > 1:
             return tuple(f"OFF{j + 1}.{r + 1}" for j in range(n) for r in range(R))
         return tuple(f"OFF{j + 1}" for j in range(n))
 
-    def columns(self, model: "TorqueModel", qd: np.ndarray, qdd: np.ndarray,
+    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
                 recording: np.ndarray | None) -> np.ndarray:
         n, R = model.robot.n_joints, model.recordings
         batch = qd.shape[:-1]
@@ -137,10 +155,10 @@ class Quadratic(AbstractTerm):
     name: ClassVar[str] = "quadratic"
     nonnegative: ClassVar[bool] = True
 
-    def names(self, model: "TorqueModel") -> tuple[str, ...]:
+    def names(self, model: TorqueModelView) -> tuple[str, ...]:
         return tuple(f"FQ{j + 1}" for j in range(model.robot.n_joints))
 
-    def columns(self, model: "TorqueModel", qd: np.ndarray, qdd: np.ndarray,
+    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
                 recording: np.ndarray | None) -> np.ndarray:
         return _diagonal(qd * np.abs(qd), qd.shape[:-1], model.robot.n_joints)
 
@@ -160,13 +178,13 @@ class SmoothCoulomb(AbstractTerm):
     def __check_init__(self):
         check_number("SmoothCoulomb's velocity", self.velocity, strict=True)
 
-    def names(self, model: "TorqueModel") -> tuple[str, ...]:
+    def names(self, model: TorqueModelView) -> tuple[str, ...]:
         if None in model.base.joint_columns("FC"):
             raise ValueError("the smooth Coulomb term needs every joint's Coulomb column in "
                              "the base set")
         return ()
 
-    def columns(self, model: "TorqueModel", qd: np.ndarray, qdd: np.ndarray,
+    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
                 recording: np.ndarray | None) -> np.ndarray:
         return np.zeros(qd.shape[:-1] + (model.robot.n_joints, 0))
 
@@ -182,10 +200,10 @@ class Armature(AbstractTerm):
     name: ClassVar[str] = "armature"
     nonnegative: ClassVar[bool] = True
 
-    def names(self, model: "TorqueModel") -> tuple[str, ...]:
+    def names(self, model: TorqueModelView) -> tuple[str, ...]:
         return tuple(f"IA{m + 1}" for m in range(model.robot.n_joints))
 
-    def columns(self, model: "TorqueModel", qd: np.ndarray, qdd: np.ndarray,
+    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
                 recording: np.ndarray | None) -> np.ndarray:
         return _through_motors(model.motor_matrix, list(range(model.robot.n_joints)), qdd)
 
@@ -203,14 +221,14 @@ class CoupledMotorFriction(AbstractTerm):
     name: ClassVar[str] = "coupling"
     nonnegative: ClassVar[bool] = True
 
-    def names(self, model: "TorqueModel") -> tuple[str, ...]:
+    def names(self, model: TorqueModelView) -> tuple[str, ...]:
         motors = model.coupled_motors
         if not motors:
             raise ValueError("friction term 'coupling' needs a transmission with a motor that "
                              "turns several joints (a coupling)")
         return tuple(f"{k}{m + 1}" for k in ("FVM", "FCM") for m in motors)
 
-    def columns(self, model: "TorqueModel", qd: np.ndarray, qdd: np.ndarray,
+    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
                 recording: np.ndarray | None) -> np.ndarray:
         K, motors = model.motor_matrix, list(model.coupled_motors)
         return np.concatenate([_through_motors(K, motors, qd),

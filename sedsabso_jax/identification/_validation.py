@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Iterable
+from typing import cast
 
 import numpy as np
 
@@ -301,7 +302,7 @@ def choose_prior_strength(robot: Robot, data: Data,
     strengths = tuple(float(v) for v in strengths)
     if not strengths or any(not (np.isfinite(v) and v >= 0) for v in strengths):
         raise ValueError(f"strengths must be numbers >= 0, at least one, got {strengths}")
-    estimator = checked(estimator).physically_consistent()
+    estimator = cast(PhysicallyConsistent, checked(estimator).physically_consistent())
     prepared = Prepared.of(robot, data, validation)
     model = model_of(robot, model)
     limits = per_joint("limits", limits, robot.n_joints)
