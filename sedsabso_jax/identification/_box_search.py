@@ -24,18 +24,8 @@ from ..optim._driver import minimise
 from ..optim._fitness import L1Residual
 from ..optim._registry import SWARMS, paper_solver
 from ..optim._solver import AbstractSolver
-from ._estimators import PhysicallyConsistent, SigmaOption, check_prior, prior_of
-from ._fitting import (
-    Estimator,
-    EstimatorFit,
-    FitProblem,
-    Limits,
-    check_sigma,
-    check_weighting,
-    no_physical_form,
-    weigh,
-    weighting_settings,
-)
+from ._estimators import AbstractRowFit, SigmaOption, check_prior, prior_of
+from ._fitting import EstimatorFit, FitProblem, Limits, check_sigma, check_weighting, weigh
 from ._model import TorqueModel
 from ._options import as_float, as_floats, as_int, check_count
 
@@ -94,7 +84,7 @@ def on_faces(x: np.ndarray, lower: np.ndarray, upper: np.ndarray,
     return (x - lower <= margin) | (upper - x <= margin)
 
 
-class BoxSearch(Estimator):
+class BoxSearch(AbstractRowFit):
     """A box optimiser on the (weighted) L1 objective, Eq. 17: ``solver`` is anything
     :func:`~sedsabso_jax.minimise` runs (``SEDSABSO.paper()``, ``BSO()``, ``LDWPSO()``,
     ``Evosax("CMA_ES")``; a swarm's name: its paper settings), ``runs`` independent runs
@@ -119,9 +109,7 @@ class BoxSearch(Estimator):
     sigma: SigmaOption = eqx.field(default=None, converter=as_floats)
     prior: tuple[float, ...] | None = eqx.field(default=None, converter=as_floats)
     default_weighting: ClassVar[str] = "equal"
-    physical: ClassVar[bool] = False
     costly: ClassVar[bool] = True
-    normal_equations: ClassVar[bool] = False
     registered_as: ClassVar[dict[str, dict[str, Any]]] = {
         name: {"solver": name} for name in SWARMS}
 
@@ -158,12 +146,6 @@ class BoxSearch(Estimator):
     def check(self, model: TorqueModel, limits: Limits) -> None:
         check_weighting(self, model, limits)
         self.bounds(model)
-
-    def settings(self) -> dict:
-        return weighting_settings(self)
-
-    def physically_consistent(self) -> PhysicallyConsistent:
-        raise no_physical_form(self)
 
     def fit(self, problem: FitProblem) -> EstimatorFit:
         rows = weigh(problem, self.sigma)

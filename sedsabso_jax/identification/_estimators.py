@@ -18,8 +18,9 @@ the weighted L1 norm. Each is built with its options, converted and checked ther
     WLS("limits"), BoxSearch(SEDSABSO.paper(), runs=3), PhysicallyConsistent(OLS(),
     prior_strength=1e-4)
 
-OLS and WLS are the two final forms of :class:`AbstractLeastSquares` (they differ in the
-default weighting only).
+Abstract or final: OLS and WLS are the two final forms of :class:`AbstractLeastSquares`
+(they differ in the default weighting only); L1, Levenberg-Marquardt and the box search
+those of :class:`AbstractRowFit`.
 """
 
 from __future__ import annotations
@@ -99,6 +100,21 @@ class AbstractLeastSquares(Estimator):
         check_sigma(self.sigma)
 
 
+class AbstractRowFit(Estimator):
+    """An unconstrained fit of the weighted rows themselves, not of their normal
+    equations: :class:`L1`, :class:`LevenbergMarquardt`,
+    :class:`~._box_search.BoxSearch`. None has a physically consistent form."""
+
+    physical: ClassVar[bool] = False
+    normal_equations: ClassVar[bool] = False
+
+    def settings(self) -> dict:
+        return weighting_settings(self)
+
+    def physically_consistent(self) -> PhysicallyConsistent:
+        raise no_physical_form(self)
+
+
 class OLS(AbstractLeastSquares):
     """Ordinary least squares; ``sigma`` weights the rows (:func:`~._fitting.weigh`;
     None: equal weights)."""
@@ -119,16 +135,14 @@ class WLS(AbstractLeastSquares):
     registered_as: ClassVar[dict[str, dict[str, Any]]] = {"WLS": {}}
 
 
-class L1(Estimator):
+class L1(AbstractRowFit):
     """The exact minimiser of the (weighted) summed absolute residual, Eq. 17, as the dual
     linear programme (HiGHS); its iteration count goes to the settings."""
 
     sigma: SigmaOption = eqx.field(default=None, converter=as_floats)
     name: ClassVar[str] = "L1"
     default_weighting: ClassVar[str] = "equal"
-    physical: ClassVar[bool] = False
     costly: ClassVar[bool] = False
-    normal_equations: ClassVar[bool] = False
     registered_as: ClassVar[dict[str, dict[str, Any]]] = {"L1": {}}
 
     def __check_init__(self):
@@ -143,14 +157,8 @@ class L1(Estimator):
     def check(self, model: TorqueModel, limits: Limits) -> None:
         check_weighting(self, model, limits)
 
-    def settings(self) -> dict:
-        return weighting_settings(self)
 
-    def physically_consistent(self) -> PhysicallyConsistent:
-        raise no_physical_form(self)
-
-
-class LevenbergMarquardt(Estimator):
+class LevenbergMarquardt(AbstractRowFit):
     """optimistix's Levenberg-Marquardt on the (weighted) L2 problem, columns scaled to unit
     norm, from zero (:func:`sedsabso_jax.baselines.least_squares`)."""
 
@@ -160,9 +168,7 @@ class LevenbergMarquardt(Estimator):
     atol: float = eqx.field(default=1e-10, converter=as_float)
     name: ClassVar[str] = "LM"
     default_weighting: ClassVar[str] = "equal"
-    physical: ClassVar[bool] = False
     costly: ClassVar[bool] = False
-    normal_equations: ClassVar[bool] = False
     registered_as: ClassVar[dict[str, dict[str, Any]]] = {"LM": {}}
 
     def __check_init__(self):
@@ -184,12 +190,6 @@ class LevenbergMarquardt(Estimator):
 
     def check(self, model: TorqueModel, limits: Limits) -> None:
         check_weighting(self, model, limits)
-
-    def settings(self) -> dict:
-        return weighting_settings(self)
-
-    def physically_consistent(self) -> PhysicallyConsistent:
-        raise no_physical_form(self)
 
 
 class PhysicallyConsistent(Estimator):

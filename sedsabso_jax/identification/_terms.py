@@ -93,6 +93,13 @@ class AbstractTerm(eqx.Module):
                 for f in dataclasses.fields(self)}
 
 
+class AbstractColumns(AbstractTerm):
+    """A term that adds columns and leaves the Coulomb columns as they are."""
+
+    def coulomb(self, qd: np.ndarray) -> None:
+        return None
+
+
 def _diagonal(values: np.ndarray | float, batch: tuple[int, ...], n: int) -> np.ndarray:
     """``(..., n, n)`` columns with ``values`` on joint ``j``'s own column ``j``."""
     E = np.zeros(batch + (n, n))
@@ -110,7 +117,7 @@ def _through_motors(K: np.ndarray, motors: list[int], v: np.ndarray, sign: bool 
     return K[motors].T * u[..., None, :]
 
 
-class Offset(AbstractTerm):
+class Offset(AbstractColumns):
     """``OFF_j``: a constant torque per joint (a torque sensor's zero). With a model of
     ``R > 1`` recordings, one per joint and recording, ``OFFj.r``: rows of recording ``r``
     carry 1 in column ``OFFj.r``, rows of no recording (new motions) ``1/R`` in each,
@@ -144,26 +151,35 @@ class Offset(AbstractTerm):
         E[..., np.arange(n), np.arange(n), :] = share[..., None, :]
         return E.reshape(batch + (n, n * R))
 
-    def coulomb(self, qd: np.ndarray) -> None:
-        return None
+
+class AbstractJointFriction(AbstractColumns):
+    """A friction term of each joint's own velocity: one column per joint, ``PREFIXj``,
+    with :meth:`torque` on the joint's own row."""
+
+    prefix: eqx.AbstractClassVar[str]
+
+    @abc.abstractmethod
+    def torque(self, qd: np.ndarray) -> np.ndarray:
+        """Each joint's column value at velocities ``qd (..., n)``."""
+
+    def names(self, model: TorqueModelView) -> tuple[str, ...]:
+        return tuple(f"{self.prefix}{j + 1}" for j in range(model.robot.n_joints))
+
+    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
+                recording: np.ndarray | None) -> np.ndarray:
+        return _diagonal(self.torque(qd), qd.shape[:-1], model.robot.n_joints)
 
 
-class Quadratic(AbstractTerm):
+class Quadratic(AbstractJointFriction):
     """``FQ_j qd_j |qd_j|``: friction growing with the velocity squared (a lubricant's
     drag at speed), ``>= 0`` for a physical body."""
 
     name: ClassVar[str] = "quadratic"
+    prefix: ClassVar[str] = "FQ"
     nonnegative: ClassVar[bool] = True
 
-    def names(self, model: TorqueModelView) -> tuple[str, ...]:
-        return tuple(f"FQ{j + 1}" for j in range(model.robot.n_joints))
-
-    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
-                recording: np.ndarray | None) -> np.ndarray:
-        return _diagonal(qd * np.abs(qd), qd.shape[:-1], model.robot.n_joints)
-
-    def coulomb(self, qd: np.ndarray) -> None:
-        return None
+    def torque(self, qd: np.ndarray) -> np.ndarray:
+        return qd * np.abs(qd)
 
 
 class SmoothCoulomb(AbstractTerm):
@@ -192,7 +208,7 @@ class SmoothCoulomb(AbstractTerm):
         return np.tanh(qd / self.velocity)
 
 
-class Armature(AbstractTerm):
+class Armature(AbstractColumns):
     """``K_m^T IA_m (K_m . qdd)``: the rotor inertia ``IA_m`` of motor ``m`` (kg m^2,
     motor side), ``>= 0``. Without a transmission ``K = 1``: joint ``j``'s column is
     ``qdd_j``; with a diagonal ``K`` its effect at the joint is ``N_j^2 IA_j``."""
@@ -207,11 +223,8 @@ class Armature(AbstractTerm):
                 recording: np.ndarray | None) -> np.ndarray:
         return _through_motors(model.motor_matrix, list(range(model.robot.n_joints)), qdd)
 
-    def coulomb(self, qd: np.ndarray) -> None:
-        return None
 
-
-class CoupledMotorFriction(AbstractTerm):
+class CoupledMotorFriction(AbstractColumns):
     """``K_m^T (FVM_m u_m + FCM_m sign(u_m))`` with ``u_m = K_m . qd``: the viscous and
     Coulomb friction (motor side, ``>= 0``) of each motor ``m`` that turns with several
     joints (a coupled wrist), which no single joint's friction describes. Columns
@@ -233,9 +246,6 @@ class CoupledMotorFriction(AbstractTerm):
         K, motors = model.motor_matrix, list(model.coupled_motors)
         return np.concatenate([_through_motors(K, motors, qd),
                                _through_motors(K, motors, qd, sign=True)], -1)
-
-    def coulomb(self, qd: np.ndarray) -> None:
-        return None
 
 
 #: The words of ``--friction``'s ``a+b`` text, in column order.
