@@ -50,7 +50,7 @@ import sedsabso_jax as sj
 from benchmarks.device import device_info
 from benchmarks.output import to_json
 from sedsabso_jax.dynamics import joint_limits
-from sedsabso_jax.identification import ESTIMATOR_CANDIDATES, FRICTION_CANDIDATES
+from sedsabso_jax.identification import ESTIMATOR_CANDIDATES, candidate_models
 from sedsabso_jax.measurements import DEFAULT_CUTOFF_HZ, differentiate
 
 RATE, DURATION = 100.0, 10.0  # the design's period; recordings are two periods
@@ -123,8 +123,8 @@ def study(plants: int) -> dict:
                                     duration=DURATION, rate=RATE).trajectory
                for seed in range(plants + 3)]
     design_s = time.perf_counter() - start
-    common = dict(estimators=estimators(), frictions=FRICTION_CANDIDATES, limits=tau_max,
-                  base=base)
+    common = dict(estimators=estimators(), models=candidate_models(robot, base=base),
+                  limits=tau_max)
     results = []
     for p in range(plants):
         t0 = time.perf_counter()

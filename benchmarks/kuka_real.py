@@ -30,6 +30,7 @@ import jax
 import numpy as np
 
 import sedsabso_jax as sj
+from sedsabso_jax.identification import parse_friction
 
 LIMITS = np.array([176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0])
 FIELDS = ("positions", "velocities", "accelerations", "torques")
@@ -92,13 +93,16 @@ def main(argv=None):
     base = sj.base_parameters(robot)
     train = load(os.path.join(args.data, "measurements_1.npz"))
     test = load(os.path.join(args.data, "measurements_2.npz"))
-    common = dict(base=base, limits=LIMITS)
-    sj.identify(robot, train, **common)  # compile the regressor for this sample count
+    models = {}  # one model per friction text, built once
+    sj.identify(robot, train, sj.OLS(), sj.TorqueModel.of(robot, base=base),
+                limits=LIMITS)  # compile the regressor for this sample count
 
     rows = []
     for label, friction, estimator in configurations(not args.no_swarms, args.runs):
+        if friction not in models:
+            models[friction] = sj.TorqueModel.of(robot, parse_friction(friction), base=base)
         t0 = time.perf_counter()
-        ident = sj.identify(robot, train, estimator, friction, **common)
+        ident = sj.identify(robot, train, estimator, models[friction], limits=LIMITS)
         seconds = time.perf_counter() - t0
         tau_pred = ident.predict(*test[:3])
         metrics = sj.validation_metrics(test[3], tau_pred, LIMITS)

@@ -40,7 +40,7 @@ import sedsabso_jax as sj
 from benchmarks.output import to_json
 from data import real_robots
 from sedsabso_jax.dynamics import joint_limits, params_from_com, pseudo_inertia
-from sedsabso_jax.identification import phase_folds
+from sedsabso_jax.identification import parse_friction, phase_folds
 from sedsabso_jax.robots import FRANKA_PANDA_MDH, from_mdh
 
 GAZ = real_robots.PANDA / "gaz2019_parameters.json"
@@ -294,8 +294,9 @@ def tx40(tmp: Path, nested: dict) -> dict:
         estimator = sj.Estimator.named(settings["method"], sigma=settings["sigma"])
         if settings.get("physical"):
             estimator = sj.PhysicallyConsistent(estimator)
-        ident = sj.identify(robot, data, estimator, settings["friction"], limits=limits,
-                            base=base, transmission=tr)
+        model = sj.TorqueModel.of(robot, parse_friction(settings["friction"]), base=base,
+                                  transmission=tr)
+        ident = sj.identify(robot, data, estimator, model, limits=limits)
         extra = {n: v for n, v in zip(ident.names, ident.values)
                  if re.fullmatch(r"(FV|FC|OFF|FQ|IA|FVM|FCM)\d+", n)}
         fits[label] = {"settings": settings, "fit_whole_run": ident.fit["nrms_limits_percent"],

@@ -41,6 +41,7 @@ import sedsabso_jax as sj
 from benchmarks.output import to_json
 from data import real_robots
 from sedsabso_jax.dynamics import joint_limits
+from sedsabso_jax.identification import candidate_models
 
 DEFAULT = "default"
 BY_SPEED = "the same candidates chosen by speed splits alone"
@@ -82,19 +83,19 @@ def fits(robot, train: sj.Measurements, limits, transmission, base, inner) -> di
     """The settings on ``train``: the reports of the choices, plain OLS's
     identification; ``inner``: the phase folds (a count, or labels) of the choices by
     phase folds and of the default's second validation."""
-    common = dict(limits=limits.torque_limits, base=base, transmission=transmission)
+    models = candidate_models(robot, transmission=transmission, base=base)
+    common = dict(limits=limits.torque_limits, models=models)
     phase = sj.GivenFolds(inner) if np.ndim(inner) == 1 else sj.PhaseFolds(inner)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        default = sj.select_and_identify(robot, train, folds=inner, **common)
+        default = sj.select_and_identify(robot, train, validation=sj.Pooled(
+            (phase, sj.SpeedSplits())), **common)
         by_speed = sj.select_and_identify(robot, train, validation=sj.SpeedSplits(),
                                           **common)
-        by_phase = sj.select_and_identify(robot, train, folds=inner, validation=phase,
+        by_phase = sj.select_and_identify(robot, train, validation=phase, **common)
+        previous = sj.select_and_identify(robot, train, physical=False, validation=phase,
                                           **common)
-        previous = sj.select_and_identify(robot, train, physical=False, folds=inner,
-                                          validation=phase, **common)
-        model = sj.TorqueModel.of(robot, "viscous-coulomb", transmission=transmission,
-                                  base=base)
+        model = sj.TorqueModel.of(robot, transmission=transmission, base=base)
         plain = sj.identify(robot, train, sj.OLS(), model, limits=limits.torque_limits)
     return {DEFAULT: default, BY_SPEED: by_speed, BY_PHASE: by_phase, PREVIOUS: previous,
             PLAIN: plain}

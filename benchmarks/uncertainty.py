@@ -19,7 +19,7 @@ from benchmarks.device import device_info
 from benchmarks.output import to_json
 from sedsabso_jax.dynamics import joint_limits
 
-MODEL = "viscous-coulomb+offset+armature"
+MODEL = (sj.Offset(), sj.Armature())
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -31,12 +31,14 @@ def main(argv: list[str] | None = None) -> None:
         warnings.simplefilter("ignore")  # the KUKA URDF's duplicate <origin>; IA1, IA2
         robot = sj.robots.kuka_lwr4()
         limits = joint_limits("kuka_lwr4", robot).tau_max
-        fits = [sj.identify(robot, sj.load_kuka_lwr4(run), sj.OLS(), MODEL, limits=limits)
+        model = sj.TorqueModel.of(robot, MODEL)
+        fits = [sj.identify(robot, sj.load_kuka_lwr4(run), sj.OLS(), model, limits=limits)
                 for run in (1, 2)]
     z = (fits[0].values - fits[1].values) / np.sqrt(fits[0].std ** 2 + fits[1].std ** 2)
     relative = fits[0].relative_std_percent
     worst = int(np.argmax(relative))
-    found = {"model": MODEL, "parameters": len(z), "median_abs_z": float(np.median(np.abs(z))),
+    found = {"model": model.friction, "parameters": len(z),
+             "median_abs_z": float(np.median(np.abs(z))),
              "fraction_within_one": float(np.mean(np.abs(z) < 1)),
              "expected": {"median_abs_z": 0.674, "fraction_within_one": 0.683},
              "run1_relative_std_percent": {"median": float(np.median(relative)),

@@ -14,7 +14,6 @@ is off) and compose under ``jax.jit`` and ``jax.vmap``.
 
 from __future__ import annotations
 
-from . import _deprecation
 from . import baselines as baselines
 from . import compare as compare
 from . import dynamics as dynamics
@@ -39,10 +38,10 @@ from .dynamics._robot import Robot as Robot
 from .excitation._design import design_excitation as design_excitation
 from .excitation._trajectory import FourierTrajectory as FourierTrajectory
 from .identification._auto import select_and_identify as select_and_identify
+from .identification._box_search import BoxSearch as BoxSearch
 from .identification._estimators import L1 as L1
 from .identification._estimators import OLS as OLS
 from .identification._estimators import WLS as WLS
-from .identification._estimators import BoxSearch as BoxSearch
 from .identification._estimators import LevenbergMarquardt as LevenbergMarquardt
 from .identification._estimators import PhysicallyConsistent as PhysicallyConsistent
 from .identification._fitting import Estimator as Estimator
@@ -58,6 +57,11 @@ from .identification._splits import Pooled as Pooled
 from .identification._splits import RecordingFolds as RecordingFolds
 from .identification._splits import SpeedSplits as SpeedSplits
 from .identification._splits import Validation as Validation
+from .identification._terms import Armature as Armature
+from .identification._terms import CoupledMotorFriction as CoupledMotorFriction
+from .identification._terms import Offset as Offset
+from .identification._terms import Quadratic as Quadratic
+from .identification._terms import SmoothCoulomb as SmoothCoulomb
 from .identification._validation import choose_prior_strength as choose_prior_strength
 from .identification._validation import cross_validate as cross_validate
 from .identification._validation import select_model as select_model
@@ -90,14 +94,9 @@ __all__ = [
     "minimise", "AbstractSolver", "SEDSABSO", "BSO", "LDWPSO", "Evosax", "BlackBox",
     "L1Residual", "Result", "box_around", "iterations_for_budget", "evaluation_counts",
     "identify", "Identification", "select_and_identify", "IdentificationReport",
-    "TorqueModel", "Estimator", "OLS", "WLS", "L1", "LevenbergMarquardt", "BoxSearch",
+    "TorqueModel", "Offset", "Quadratic", "SmoothCoulomb", "Armature",
+    "CoupledMotorFriction", "Estimator", "OLS", "WLS", "L1", "LevenbergMarquardt", "BoxSearch",
     "PhysicallyConsistent", "validation_metrics", "Metrics", "cross_validate",
     "select_model", "choose_prior_strength", "Validation", "PhaseFolds", "SpeedSplits",
     "RecordingFolds", "GivenFolds", "Pooled",
 ]
-
-#: Old root names, kept with a warning through 0.3.x.
-__getattr__ = _deprecation.moved(__name__, {
-    "metrics": ("sedsabso_jax.identification._metrics",
-                "sedsabso_jax.validation_metrics and sedsabso_jax.Metrics"),
-})

@@ -1,5 +1,6 @@
-"""Deprecated names and call forms: each keeps working through 0.3.x with a
-DeprecationWarning that points at the caller's line and names the replacement."""
+"""Deprecated names and call forms: each keeps working until the release it names, with a
+DeprecationWarning that points at the caller's line and names the replacement ("... will
+be removed after sedsabso-jax X.Y; use ..."); and the caller's line for other warnings."""
 
 from __future__ import annotations
 
@@ -27,15 +28,24 @@ def caller_stacklevel() -> int:
     return level
 
 
-def warn(old: str, new: str) -> None:
-    """Warn that ``old`` is deprecated in favour of ``new``."""
-    warnings.warn(f"{old} is deprecated and will be removed after sedsabso-jax 0.3; use {new}",
-                  DeprecationWarning, stacklevel=caller_stacklevel())
+#: The release after which the deprecations of 0.3 (the last ones left, in
+#: :mod:`sedsabso_jax.optim`) go: the default of ``removed_after`` until they are gone.
+REMOVED_AFTER_03 = "0.3"
 
 
-def renamed_arguments(cls: type[_T], renamed: dict[str, str]) -> type[_T]:
+def warn(old: str, new: str, *, removed_after: str = REMOVED_AFTER_03) -> None:
+    """Warn that ``old`` is deprecated in favour of ``new`` and goes after release
+    ``removed_after`` (e.g. ``"0.5"``)."""
+    warnings.warn(f"{old} is deprecated and will be removed after sedsabso-jax "
+                  f"{removed_after}; use {new}", DeprecationWarning,
+                  stacklevel=caller_stacklevel())
+
+
+def renamed_arguments(cls: type[_T], renamed: dict[str, str], *,
+                      removed_after: str = REMOVED_AFTER_03) -> type[_T]:
     """Let ``cls(old=...)`` stand for ``cls(new=...)`` for each ``old: new``, with a
-    warning. Passing both is a TypeError."""
+    warning that the old name goes after release ``removed_after``. Passing both is a
+    TypeError."""
     init = cls.__init__
 
     @functools.wraps(init)
@@ -44,7 +54,8 @@ def renamed_arguments(cls: type[_T], renamed: dict[str, str]) -> type[_T]:
             if old in kwargs:
                 if new in kwargs:
                     raise TypeError(f"{cls.__name__}() got both {old}= (deprecated) and {new}=")
-                warn(f"{cls.__name__}({old}=...)", f"{new}=...")
+                warn(f"{cls.__name__}({old}=...)", f"{new}=...",
+                     removed_after=removed_after)
                 kwargs[new] = kwargs.pop(old)
         init(self, *args, **kwargs)
 
@@ -72,7 +83,8 @@ def moved(module_name: str, names: dict[str, str | tuple[str, str]],
     """A module ``__getattr__`` for names that moved: each ``old: "new.dotted.path"`` is
     served from its new place with a warning naming it (``old: (path, advice)``: the
     warning gives the advice instead). With ``module`` (a deprecated module path kept as
-    a shim), any other name is looked up there, with a warning."""
+    a shim), any other name is looked up there, with a warning. (Used by
+    :mod:`sedsabso_jax.optim` for its 0.3 names only.)"""
     def __getattr__(name: str) -> Any:
         if name in names:
             where = names[name]

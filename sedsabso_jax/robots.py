@@ -5,7 +5,6 @@
 
 from __future__ import annotations
 
-from . import _deprecation
 from .dynamics._robots import BUILTIN as BUILTIN
 from .dynamics._robots import FRANKA_PANDA_MDH as FRANKA_PANDA_MDH
 from .dynamics._robots import franka_panda as franka_panda
@@ -23,9 +22,3 @@ __all__ = [
     "rs010n", "kuka_lwr4", "kuka_lwr4_urdf", "staubli_tx40", "staubli_tx40_urdf",
     "franka_panda", "FRANKA_PANDA_MDH", "from_urdf", "from_mdh", "from_dh", "load", "BUILTIN",
 ]
-
-__getattr__ = _deprecation.moved(__name__, {
-    "KUKA_LWR4_URDF": ("sedsabso_jax.robots.kuka_lwr4_urdf",
-                       "sedsabso_jax.robots.kuka_lwr4_urdf()"),
-    "RS010N_TABLE2": "sedsabso_jax.paper.TABLE2",
-})

@@ -90,7 +90,7 @@ def test_armature_and_coupling_columns(rng):
     base = sj.base_parameters(robot)
     K = np.diag([10.0, 20.0, 30.0])
     K[2, 1] = 30.0  # motor 3 turns with joints 2 and 3
-    model = TorqueModel(base, "viscous-coulomb+armature+coupling", transmission=K)
+    model = TorqueModel(base, (sj.Armature(), sj.CoupledMotorFriction()), transmission=K)
     assert model.regrouped == ("IA1", "IA2")
     assert model.names[base.rank:] == ("IA3", "FVM3", "FCM3")
     assert list(model.nonnegative[base.rank:]) == [True] * 3
@@ -102,9 +102,9 @@ def test_armature_and_coupling_columns(rng):
         np.testing.assert_allclose(Y[t, :, 1], K[2] * (K[2] @ qd[t]))  # FVM3
         np.testing.assert_allclose(Y[t, :, 2], K[2] * np.sign(K[2] @ qd[t]))  # FCM3
     with pytest.raises(ValueError, match="'coupling' needs a transmission"):
-        TorqueModel(base, "viscous-coulomb+coupling")
+        TorqueModel(base, (sj.CoupledMotorFriction(),))
     with pytest.raises(ValueError, match=r"transmission must be a finite \(3, 3\)"):
-        TorqueModel(base, "viscous-coulomb+armature", transmission=np.eye(2))
+        TorqueModel(base, (sj.Armature(),), transmission=np.eye(2))
 
 
 def test_armature_is_identified_from_simulated_data(rng):
@@ -123,7 +123,8 @@ def test_armature_is_identified_from_simulated_data(rng):
     tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
     tau = tau + (qdd @ K.T * Ia) @ K  # K^T diag(Ia) K qdd
     with pytest.warns(UserWarning, match="IA1, IA2 cannot be identified apart"):
-        ident = sj.identify(robot, (q, qd, qdd, tau), sj.OLS(), "armature", transmission=K)
+        ident = sj.identify(robot, (q, qd, qdd, tau), sj.OLS(),
+                            sj.TorqueModel.of(robot, [sj.Armature()], transmission=K))
     values = dict(zip(ident.names, ident.values))
     assert values["IA3"] == pytest.approx(3e-4, rel=1e-6)
     # the full model (all columns) predicts the torques exactly
@@ -167,12 +168,12 @@ def test_selection_finds_the_torque_offset_and_rejects_extra_terms(rng):
     scores = {s["friction"]: cv for s, cv in sel.candidates}
     assert scores["viscous-coulomb+offset"].score < 0.5 * scores["viscous-coulomb"].score
     assert scores["viscous-coulomb+offset"].period_s == pytest.approx(10.0, abs=0.05)
-    cv = cross_validate(robot, recording, sj.OLS(), "offset", folds=5)
+    cv = cross_validate(robot, recording, sj.OLS(), sel.model, validation=sj.PhaseFolds(5))
     assert cv.score == pytest.approx(scores["viscous-coulomb+offset"].score)
     assert cv.measure == "relative_rms_percent" and len(cv.fold_scores) == 5
     assert 0.8 < cv.score < 1.5  # about the 1 % noise: the model generalises
     with pytest.raises(ValueError, match="fold labels must be integers"):
-        cross_validate(robot, recording, folds=np.zeros(3, int))
+        cross_validate(robot, recording, validation=sj.GivenFolds(np.zeros(3, int)))
 
 
 def _rs010n_run(n, amplitude, noise, seed=1):
@@ -209,8 +210,8 @@ def test_prior_strength_follows_what_the_data_can_say():
     cv = dict(sel.candidates)
     assert sel.chosen <= 1e-6 and cv[1.0].score > 5 * cv[sel.chosen].score
     assert sel.as_dict()["candidates"][0]["prior_strength"] == 0.0
-    with pytest.raises(ValueError, match=r"physically consistent least-squares fit: "
-                                         r"PhysicallyConsistent\(\.\.\.\) \(of OLS or WLS\)"):
+    with pytest.raises(ValueError, match=r"^a physically consistent fit is a least-squares "
+                                         r"fit: use method 'OLS' or 'WLS', not 'L1'$"):
         choose_prior_strength(robot, d, sj.L1())
     with pytest.raises(ValueError, match="strengths must be numbers >= 0"):
         choose_prior_strength(robot, d, strengths=(0.0, -1.0))

@@ -258,11 +258,12 @@ def test_yaml_config_without_pyyaml_says_what_to_do(tmp_path, monkeypatch, capsy
 def test_select_and_identify_reports_each_fit(data_file):
     calls: list[tuple[str, int, int]] = []
     data = sj.load_measurements(data_file, n_joints=3)
-    quiet = sj.select_and_identify(sj.robots.rs010n(), data, estimators=sj.OLS(),
-                                   frictions="viscous-coulomb", physical=True,
-                                   prior_strength=1e-3)
-    report = sj.select_and_identify(sj.robots.rs010n(), data, estimators=sj.OLS(),
-                                    frictions="viscous-coulomb", physical=True,
+    robot = sj.robots.rs010n()
+    plain = sj.TorqueModel.of(robot)
+    quiet = sj.select_and_identify(robot, data, estimators=sj.OLS(), models=plain,
+                                   physical=True, prior_strength=1e-3)
+    report = sj.select_and_identify(robot, data, estimators=sj.OLS(), models=plain,
+                                    physical=True,
                                     prior_strength=1e-3,
                                     progress=lambda *call: calls.append(call))
     # 3 speed splits' and 5 phase folds' conic fits, then the fit on all the data
@@ -274,8 +275,10 @@ def test_select_and_identify_reports_each_fit(data_file):
 def test_model_choice_and_prior_report_each_fit(data_file):
     calls: list[tuple[str, int, int]] = []
     data = sj.load_measurements(data_file, n_joints=3)
-    sj.select_and_identify(sj.robots.rs010n(), data, estimators=(sj.OLS(), sj.WLS()),
-                           frictions=("viscous-coulomb", "viscous-coulomb+offset"), folds=3,
+    robot = sj.robots.rs010n()
+    sj.select_and_identify(robot, data, estimators=(sj.OLS(), sj.WLS()),
+                           models=sj.identification.candidate_models(robot, [(), [sj.Offset()]]),
+                           validation=sj.identification.DefaultValidation(3),
                            physical=True, prior_strength=1e-3,
                            progress=lambda *call: calls.append(call))
     # candidates (with the pull to the prior) x (3 speed splits + 3 phase folds), then the fit

@@ -1,123 +1,68 @@
-"""Names renamed in 0.2 and call forms replaced in 0.3 keep working through 0.3.x: each
-warns (DeprecationWarning, at the caller's line, "removed after sedsabso-jax 0.3") and does
-what the new form does."""
+"""Deprecations: the warning a deprecated name gives (DeprecationWarning at the caller's
+line, "will be removed after sedsabso-jax X.Y", the release given), and what 0.5 removed
+of 0.3's deprecations (outside sedsabso_jax.optim): 0.2's call forms, the moved-name
+tables and the old module paths are gone, each an ordinary error."""
 
 from __future__ import annotations
+
+import importlib
 
 import numpy as np
 import pytest
 
 import sedsabso_jax as sj
-from sedsabso_jax._output import jsonable
+from sedsabso_jax import _deprecation
 
 
-def test_sedsabso_renamed_hyperparameters():
-    with pytest.deprecated_call() as record:
-        old = sj.SEDSABSO(q=2, f_min=0.2, f_max=0.8)
-    assert sorted(str(w.message).split(" is ")[0] for w in record) == [
-        "SEDSABSO(f_max=...)", "SEDSABSO(f_min=...)", "SEDSABSO(q=...)"]
-    assert "use n_trials=..." in str(record[0].message)
-    assert old == sj.SEDSABSO(n_trials=2, exponent_start=0.2, exponent_end=0.8)
-    with pytest.deprecated_call(match=r"SEDSABSO\.q is deprecated"):
-        assert old.q == 2
-    with pytest.raises(TypeError, match="both q= .deprecated. and n_trials="):
-        sj.SEDSABSO(q=2, n_trials=3)
-
-
-def test_warnings_point_at_the_caller():
-    with pytest.deprecated_call() as record:
-        sj.SEDSABSO(q=1)
+def test_a_deprecation_names_its_release_and_points_at_the_caller():
+    with pytest.deprecated_call(match=r"^old\(\) is deprecated and will be removed after "
+                                      r"sedsabso-jax 0\.5; use new\(\)$") as record:
+        _deprecation.warn("old()", "new()", removed_after="0.5")
     assert record[0].filename == __file__
 
+    class Thing:
+        def __init__(self, size=1):
+            self.size = size
 
-def test_identify_weights_is_sigma(rng):
-    robot = sj.robots.rs010n()
-    base = sj.base_parameters(robot)
-    q, qd, qdd = rng.standard_normal((3, 200, 3))
-    tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
-    tau = tau + 0.1 * rng.standard_normal(tau.shape)
-    new = sj.identify(robot, (q, qd, qdd, tau), sj.WLS([1.0, 2.0, 3.0]), base=base)
-    with pytest.deprecated_call() as record:
-        old = sj.identify(robot, q, qd, qdd, tau, method="WLS", weights=[1.0, 2.0, 3.0],
-                          base=base)
-    messages = [str(w.message) for w in record]
-    assert any(m.startswith("identify(weights=...) is deprecated and will be removed after "
-                            "sedsabso-jax 0.3; use sigma=") for m in messages), messages
-    np.testing.assert_array_equal(old.values, new.values)
+    _deprecation.renamed_arguments(Thing, {"n": "size"}, removed_after="0.6")
+    with pytest.deprecated_call(match=r"^Thing\(n=\.\.\.\) is deprecated and will be removed "
+                                      r"after sedsabso-jax 0\.6; use size=\.\.\.$"):
+        assert Thing(n=3).size == 3
+    with pytest.raises(TypeError, match=r"both n= \(deprecated\) and size="):
+        Thing(n=3, size=4)
 
 
-@pytest.fixture(scope="module")
-def recording():
-    """A small noisy RS010N recording over two periods of one motion."""
-    robot = sj.robots.rs010n()
-    rng = np.random.default_rng(5)
-    traj = sj.FourierTrajectory(rng.uniform(-0.3, 0.3, (3, 3)), rng.uniform(-0.3, 0.3, (3, 3)),
-                                np.zeros(3), wf=2 * np.pi / 4)
-    data = sj.simulate_measurements_along(robot, traj, np.arange(160) / 20.0,
-                                          torque_noise=0.02, seed=1)
-    return robot, data, (data.times, data.q, data.qd, data.qdd, data.tau)
-
-
-def _same_cv(a, b):
-    np.testing.assert_array_equal(a.fold_scores, b.fold_scores)
-    assert jsonable(a.settings) == jsonable(b.settings) and a.period_s == b.period_s
-
-
-def test_validation_keyword_forms(recording):
-    """cross_validate, select_model and choose_prior_strength with 0.2's (robot, times, q,
-    qd, qdd, tau, **identify_settings): a warning at the caller's line, the new result."""
-    from sedsabso_jax.identification import _validation as V
-
-    robot, data, arrays = recording
-    limits = [100.0, 100.0, 50.0]
-    with pytest.deprecated_call(match=r"cross_validate\(robot, times, q, qd, qdd, tau, "
-                                      r"method=\.\.\., friction=\.\.\., \.\.\.\) is "
-                                      r"deprecated") as record:
-        old = V.cross_validate(robot, *arrays, folds=3, method="WLS", sigma="limits",
-                               friction="offset", limits=limits)
-    assert record[0].filename == __file__
-    _same_cv(old, V.cross_validate(robot, data, sj.WLS("limits"), "offset", folds=3,
-                                   limits=limits))
-    with pytest.deprecated_call(match=r"select_model\(robot, times"):
-        old = V.select_model(robot, *arrays, frictions=("viscous-coulomb", "offset"),
-                             weightings=(("OLS", None), ("L1", "limits")), folds=3,
-                             limits=limits, physical=False)
-    new = V.select_model(robot, data, estimators=(sj.OLS(), sj.L1("limits")),
-                         frictions=("viscous-coulomb", "offset"), folds=3, limits=limits)
-    assert old.as_dict()["chosen"] == new.as_dict()["chosen"]
-    assert [s for s, _ in old.candidates] == [s for s, _ in new.candidates]
-    for (_, a), (_, b) in zip(old.candidates, new.candidates):
-        _same_cv(a, b)
-    with pytest.deprecated_call(match=r"select_model\(weightings=\.\.\.\)"):
-        V.select_model(robot, data, weightings=(("OLS", None),), frictions="offset", folds=3)
-    with pytest.deprecated_call(match=r"choose_prior_strength\(robot, times"):
-        old = V.choose_prior_strength(robot, *arrays, strengths=(0.0, 1.0), folds=3,
-                                      method="WLS", sigma="limits", limits=limits)
-    new = V.choose_prior_strength(robot, data, sj.WLS("limits"), strengths=(0.0, 1.0), folds=3,
-                                  limits=limits)
-    assert (old.chosen, old.best) == (new.chosen, new.best)
-    assert new.estimator == sj.PhysicallyConsistent(sj.WLS("limits"), prior_strength=old.chosen)
-    for (_, a), (_, b) in zip(old.candidates, new.candidates):
-        _same_cv(a, b)
-
-
-@pytest.mark.parametrize("module, old, new", [
-    ("sedsabso_jax.excitation", "search_box", lambda: sj.excitation.coefficient_box),
-    ("sedsabso_jax.robots", "KUKA_LWR4_URDF", lambda: sj.robots.kuka_lwr4_urdf),
-    ("sedsabso_jax.robots", "RS010N_TABLE2", lambda: sj.paper.TABLE2),
-    ("sedsabso_jax.identification", "Model", lambda: sj.TorqueModel),
-    ("sedsabso_jax.optim", "minimise", lambda: sj.minimise),
-    ("sedsabso_jax.dynamics", "robots", lambda: sj.robots),
-    ("sedsabso_jax", "metrics", lambda: sj.identification._metrics),
-    ("sedsabso_jax.measurements.transmission", "Transmission", lambda: sj.Transmission),
-    ("sedsabso_jax.reproduce.experiment", "run", lambda: sj.reproduce.run),
+@pytest.mark.parametrize("module, name", [
+    ("sedsabso_jax", "metrics"), ("sedsabso_jax.robots", "KUKA_LWR4_URDF"),
+    ("sedsabso_jax.robots", "RS010N_TABLE2"), ("sedsabso_jax.dynamics", "Robot"),
+    ("sedsabso_jax.dynamics", "robots"), ("sedsabso_jax.measurements", "Measurements"),
+    ("sedsabso_jax.excitation", "search_box"), ("sedsabso_jax.excitation", "JointLimits"),
+    ("sedsabso_jax.identification", "identify"), ("sedsabso_jax.identification", "Model"),
+    ("sedsabso_jax.identification", "METHODS"),
 ])
-def test_moved_module_names(module, old, new):
-    import importlib
+def test_moved_names_of_0_3_are_gone(module, name):
+    with pytest.raises(AttributeError):
+        getattr(importlib.import_module(module), name)
 
-    mod = importlib.import_module(module)
-    with pytest.deprecated_call(match=f"{module}.{old} is deprecated"):
-        value = getattr(mod, old)
-    assert value is new()
-    with pytest.raises(AttributeError, match="has no attribute 'no_such_name'"):
-        mod.no_such_name  # noqa: B018
+
+@pytest.mark.parametrize("path", ["sedsabso_jax.dynamics.robots",
+                                  "sedsabso_jax.identification.validation",
+                                  "sedsabso_jax.reproduce.experiment",
+                                  "sedsabso_jax.measurements.transmission",
+                                  "sedsabso_jax.identification._legacy"])
+def test_old_module_paths_are_gone(path):
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module(path)
+
+
+def test_0_2_call_forms_are_gone():
+    robot = sj.robots.rs010n()
+    z = np.zeros((20, 3))
+    with pytest.raises(TypeError):
+        sj.identify(robot, z, z, z, z)  # (robot, q, qd, qdd, tau)
+    with pytest.raises(TypeError):
+        sj.identify(robot, (z, z, z, z), method="OLS", friction="offset")
+    with pytest.raises(TypeError):
+        sj.select_model(robot, (z[:, 0], z, z, z, z), weightings=(("OLS", None),))
+    with pytest.raises(TypeError):
+        sj.select_and_identify(robot, (z[:, 0], z, z, z, z), frictions=("offset",))

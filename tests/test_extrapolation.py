@@ -200,7 +200,8 @@ def test_command_warns_and_writes_the_table_and_json(slow_and_fast, tmp_path, ca
 def test_report_without_held_out_has_no_extrapolation(slow_and_fast):
     data = sj.load_measurements(slow_and_fast[0], n_joints=3)
     report = sj.select_and_identify(sj.robots.rs010n(), data, estimators=sj.OLS(),
-                                    frictions="viscous-coulomb", folds=0)
+                                    models=sj.TorqueModel.of(sj.robots.rs010n()),
+                                    validation=None)
     assert report.extrapolation is None and "extrapolation" not in report.text()
     assert report.document({})["extrapolation"] is None
     assert isinstance(extrapolation(data, data), Extrapolation)

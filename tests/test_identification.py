@@ -1,7 +1,7 @@
 """sj.identification: the estimators against closed forms and scipy on simulated data,
 recovery of simulated parameters, the physically consistent fit, box searches, warnings and
-bad input (estimator options, data, models); 0.2's call form; held-out error on the real
-KUKA files."""
+bad input (estimator options, data, models); the torque model's terms against closed
+forms; a box search's parameters on its faces; held-out error on the real KUKA files."""
 
 from __future__ import annotations
 
@@ -17,19 +17,22 @@ from sedsabso_jax import (
     L1,
     OLS,
     WLS,
+    Armature,
     BoxSearch,
+    CoupledMotorFriction,
     Estimator,
     LevenbergMarquardt,
+    Offset,
     PhysicallyConsistent,
+    Quadratic,
+    SmoothCoulomb,
     TorqueModel,
     baselines,
     identify,
     is_physically_consistent,
     validation_metrics,
 )
-from sedsabso_jax.identification import (
-    FitProblem,
-)
+from sedsabso_jax.identification import FitProblem, parse_friction
 
 KUKA_LIMITS = np.array([176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0])
 
@@ -38,6 +41,11 @@ KUKA_LIMITS = np.array([176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0])
 def rs010n():
     robot = sj.robots.rs010n()
     return robot, sj.base_parameters(robot)
+
+
+def model_of(robot, base, *terms, **options):
+    """The torque model of ``robot`` with ``terms``, on precomputed base parameters."""
+    return TorqueModel.of(robot, terms, base=base, **options)
 
 
 def states(rng, n, T=200):  # one sample count: the regressor compiles once
@@ -52,7 +60,8 @@ def test_ols_recovers_simulated_parameters(rs010n, rng):
     table, params = random_dh(rng, 3)
     off, fq = np.array([0.3, -0.2, 0.1]), np.array([0.05, 0.02, 0.01])
     tau = np.asarray(sj.inverse_dynamics(robot, params, q, qd, qdd)) + off + fq * qd * abs(qd)
-    ident = identify(robot, (q, qd, qdd, tau), OLS(), "offset+quadratic", base=base)
+    ident = identify(robot, (q, qd, qdd, tau), OLS(), model_of(robot, base, Offset(),
+                                                                Quadratic()))
     assert ident.names[-6:] == ("OFF1", "OFF2", "OFF3", "FQ1", "FQ2", "FQ3")
     truth = np.concatenate([np.asarray(base.project(params)), off, fq])
     np.testing.assert_allclose(ident.values, truth, rtol=1e-9, atol=1e-9)
@@ -61,7 +70,7 @@ def test_ols_recovers_simulated_parameters(rs010n, rng):
     # the same without the extra terms; LM and L1 reach it too
     tau0 = np.asarray(sj.inverse_dynamics(robot, params, q, qd, qdd))
     for estimator in (OLS(), LevenbergMarquardt(), L1()):
-        ident = identify(robot, (q, qd, qdd, tau0), estimator, base=base)
+        ident = identify(robot, (q, qd, qdd, tau0), estimator, model_of(robot, base))
         np.testing.assert_allclose(ident.values, base.project(params), rtol=1e-6, atol=1e-6)
 
 
@@ -74,7 +83,7 @@ def test_smooth_coulomb_model(rs010n, rng):
     Y = np.asarray(sj.regressor(robot, q, qd, qdd))
     tau = Y @ params
     tau += (np.tanh(qd / eps) - np.sign(qd)) * params[10::12]  # the smooth Coulomb term
-    model = TorqueModel.of(robot, "viscous-coulomb+smooth", smooth_velocity=eps, base=base)
+    model = model_of(robot, base, SmoothCoulomb(velocity=eps))
     ident = identify(robot, (q, qd, qdd, tau), OLS(), model)
     np.testing.assert_allclose(ident.values, base.project(params), rtol=1e-9, atol=1e-9)
     assert ident.settings["smooth_velocity"] == eps
@@ -82,20 +91,21 @@ def test_smooth_coulomb_model(rs010n, rng):
 
 def test_wls_weights(rs010n, rng):
     robot, base = rs010n
+    plain = model_of(robot, base)
     q, qd, qdd = states(rng, 3)
     tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
     tau_noisy = tau + 0.5 * rng.standard_normal(tau.shape)
-    ols = identify(robot, (q, qd, qdd, tau_noisy), base=base)
+    ols = identify(robot, (q, qd, qdd, tau_noisy), OLS(), plain)
     # equal weights: WLS is OLS exactly
-    same = identify(robot, (q, qd, qdd, tau_noisy), WLS([2.0, 2.0, 2.0]), base=base)
+    same = identify(robot, (q, qd, qdd, tau_noisy), WLS([2.0, 2.0, 2.0]), plain)
     np.testing.assert_allclose(same.values, ols.values, rtol=1e-10, atol=1e-10)
     # asked for by name ("equal", what --method WLS --weights equal gives): the same
-    equal = identify(robot, (q, qd, qdd, tau_noisy), WLS("equal"), base=base)
+    equal = identify(robot, (q, qd, qdd, tau_noisy), WLS("equal"), plain)
     assert equal.settings["weights"] == "equal" and equal.settings["sigma"] == [1.0] * 3
     np.testing.assert_allclose(equal.values, ols.values, rtol=1e-10, atol=1e-10)
     assert sj.identification.estimator_candidates("WLS", "equal") == (WLS("equal"),)
     # equal noise: Gautier's weights come out nearly equal, so WLS stays close to OLS
-    wls = identify(robot, (q, qd, qdd, tau_noisy), WLS(), base=base)
+    wls = identify(robot, (q, qd, qdd, tau_noisy), WLS(), plain)
     assert wls.settings["weights"] == "residual"
     sigma = np.array(wls.settings["sigma"])
     np.testing.assert_allclose(sigma, 0.5, rtol=0.1)
@@ -105,10 +115,10 @@ def test_wls_weights(rs010n, rng):
     tau_unequal = tau + noise * rng.standard_normal(tau.shape)
     true = np.asarray(base.values)
     err = {e.name: np.linalg.norm(identify(robot, (q, qd, qdd, tau_unequal), e,
-                                           base=base).values - true) for e in (OLS(), WLS())}
+                                           plain).values - true) for e in (OLS(), WLS())}
     assert err["WLS"] < 0.8 * err["OLS"]
-    lim = identify(robot, (q, qd, qdd, tau_noisy), WLS("limits"), limits=[100.0, 100.0, 50.0],
-                   base=base)
+    lim = identify(robot, (q, qd, qdd, tau_noisy), WLS("limits"), plain,
+                   limits=[100.0, 100.0, 50.0])
     assert lim.settings["sigma"] == [100.0, 100.0, 50.0]
     assert "nrms_limits_percent" in lim.fit
 
@@ -118,11 +128,11 @@ def test_l1_is_the_l1_optimum(rs010n, rng):
     q, qd, qdd = states(rng, 3)
     tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
     tau = tau + rng.standard_t(2, tau.shape)
-    ident = identify(robot, (q, qd, qdd, tau), L1(), "offset", base=base)
+    ident = identify(robot, (q, qd, qdd, tau), L1(), model_of(robot, base, Offset()))
     W = ident.model.regressor(q, qd, qdd).reshape(-1, len(ident.names))
     floor = baselines.l1_optimum((W, tau.reshape(-1)))
     assert ident.fit["l1"] == pytest.approx(float(floor.f), rel=1e-7)
-    ols = identify(robot, (q, qd, qdd, tau), OLS(), "offset", base=base)
+    ols = identify(robot, (q, qd, qdd, tau), OLS(), model_of(robot, base, Offset()))
     assert ident.fit["l1"] <= ols.fit["l1"]
 
 
@@ -132,7 +142,7 @@ def test_physical_fit(rs010n, rng):
     _, params = random_dh(rng, 3)  # consistent, friction >= 0
     tau = np.asarray(sj.inverse_dynamics(robot, params, q, qd, qdd))
     # consistent truth, no noise: the constrained optimum is the truth's base values
-    ident = identify(robot, (q, qd, qdd, tau), PhysicallyConsistent(), base=base)
+    ident = identify(robot, (q, qd, qdd, tau), PhysicallyConsistent(), model_of(robot, base))
     assert is_physically_consistent(ident.full_params)
     np.testing.assert_allclose(ident.values, base.project(params), rtol=1e-4, atol=1e-4)
     np.testing.assert_allclose(base.project(ident.full_params), ident.values, atol=1e-9)
@@ -140,9 +150,9 @@ def test_physical_fit(rs010n, rng):
     # fit gives a consistent set with a larger residual
     assert not is_physically_consistent(robot.params)
     tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
-    ols = identify(robot, (q, qd, qdd, tau), base=base)
+    ols = identify(robot, (q, qd, qdd, tau), OLS(), model_of(robot, base))
     phys = identify(robot, (q, qd, qdd, tau), PhysicallyConsistent(prior_weight=1e-3),
-                    base=base)
+                    model_of(robot, base))
     assert is_physically_consistent(phys.full_params)
     masses = np.asarray(phys.full_params).reshape(3, 12)[:, 6]
     assert np.all(masses > 0)
@@ -155,9 +165,10 @@ def test_swarm_identification(rs010n, rng):
     robot, base = rs010n
     q, qd, qdd = states(rng, 3)
     tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
-    ident = identify(robot, (q, qd, qdd, tau),
-                     BoxSearch(sj.LDWPSO(), box=(0.1, 0.1), runs=2, iterations=30, seed=3),
-                     base=base)
+    with pytest.warns(UserWarning, match="parameters ended on the box's faces"):
+        ident = identify(robot, (q, qd, qdd, tau),
+                         BoxSearch(sj.LDWPSO(), box=(0.1, 0.1), runs=2, iterations=30, seed=3),
+                         model_of(robot, base))
     assert ident.result is not None and np.asarray(ident.result.f).shape == (2,)
     assert ident.fit["l1"] == pytest.approx(float(np.min(ident.result.f)), rel=1e-6)
     s = ident.settings
@@ -188,21 +199,21 @@ def test_physical_fit_never_fails_silently(rs010n, rng, monkeypatch):
         return patched
 
     monkeypatch.setattr(cp.Problem, "solve", ending_with(cp.OPTIMAL_INACCURATE))
-    data, physical = (q, qd, qdd, tau), PhysicallyConsistent()
+    data, physical, model = (q, qd, qdd, tau), PhysicallyConsistent(), model_of(robot, base)
     with pytest.warns(UserWarning, match="optimal_inaccurate"):
-        ident = identify(robot, data, physical, base=base)
+        ident = identify(robot, data, physical, model)
     assert ident.settings["physical_fit"]["status"] == "optimal_inaccurate"
     for status in (cp.INFEASIBLE, cp.UNBOUNDED, cp.INFEASIBLE_INACCURATE):
         monkeypatch.setattr(cp.Problem, "solve", ending_with(status))
         with pytest.raises(RuntimeError, match=f"status '{status}'"):
-            identify(robot, data, physical, base=base)
+            identify(robot, data, physical, model)
 
     def raising(self, *args, **kwargs):
         raise cp.error.SolverError("numerical trouble")
 
     monkeypatch.setattr(cp.Problem, "solve", raising)
     with pytest.raises(RuntimeError, match="conic solver failed: numerical trouble"):
-        identify(robot, data, physical, base=base)
+        identify(robot, data, physical, model)
 
 
 def test_rank_deficiency_warns(rs010n, rng):
@@ -211,7 +222,7 @@ def test_rank_deficiency_warns(rs010n, rng):
     q[:, 2], qd[:, 2], qdd[:, 2] = 0.3, 0.0, 0.0  # joint 3 never moves
     tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
     with pytest.warns(UserWarning, match=r"rank deficient.*condition number.*FC3") as record:
-        ident = identify(robot, (q, qd, qdd, tau), base=base)
+        ident = identify(robot, (q, qd, qdd, tau), OLS(), model_of(robot, base))
     assert record[0].filename == __file__  # the warning points at the caller's line
     assert ident.fit["rank"] < len(ident.names)
     np.testing.assert_allclose(ident.predict(q, qd, qdd), tau, atol=1e-8)
@@ -220,7 +231,7 @@ def test_rank_deficiency_warns(rs010n, rng):
     tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        identify(robot, (q, qd, qdd, tau), base=base)
+        identify(robot, (q, qd, qdd, tau), OLS(), model_of(robot, base))
 
 
 def test_predict_batches(rs010n, rng):
@@ -228,7 +239,7 @@ def test_predict_batches(rs010n, rng):
     q, qd, qdd = states(rng, 3)
     tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
     ident = identify(robot, sj.Measurements(np.arange(200.0), q, qd, qdd, tau), OLS(),
-                     "offset", base=base)
+                     model_of(robot, base, Offset()))
     shape = (4, 50, 3)
     batched = ident.predict(q.reshape(shape), qd.reshape(shape), qdd.reshape(shape))
     np.testing.assert_allclose(batched.reshape(200, 3), ident.predict(q, qd, qdd), atol=1e-12)
@@ -237,12 +248,12 @@ def test_predict_batches(rs010n, rng):
 
 @pytest.mark.parametrize("make, match", [
     (lambda: OLS(sigma="robust"), r"^sigma must be None, 'equal', 'residual', 'limits' or "),
-    (lambda: WLS(sigma=[1.0, -1.0, 1.0]), r"^sigma must be None, .*got \[1.0, -1.0, 1.0\]$"),
+    (lambda: WLS(sigma=[1.0, -1.0, 1.0]), r"^sigma must be None, .*got \(1.0, -1.0, 1.0\)$"),
     (lambda: L1(sigma=[[1.0]]), "^sigma must be"),
     (lambda: LevenbergMarquardt(max_steps=0), r"^max_steps must be an integer >= 1, got 0$"),
     (lambda: LevenbergMarquardt(rtol=-1.0), r"^rtol must be a number > 0, got -1.0$"),
     (lambda: LevenbergMarquardt(atol=float("nan")), "^atol must be a number > 0"),
-    (lambda: BoxSearch("SEDSABSO"), r"^solver must be an optimiser instance"),
+    (lambda: BoxSearch("GA"), r"^solver must be an optimiser instance"),
     (lambda: BoxSearch(sj.BSO(), runs=0), r"^runs must be an integer >= 1, got 0$"),
     (lambda: BoxSearch(sj.BSO(), iterations=2.5), r"^iterations must be an integer >= 1"),
     (lambda: BoxSearch(sj.BSO(), seed=-1), r"^seed must be an integer >= 0, got -1$"),
@@ -271,36 +282,49 @@ def test_bad_estimator_options(make, match):
 
 
 @pytest.mark.parametrize("estimator, kwargs, match", [
-    (OLS(), dict(model="stribeck"), "unknown friction term"),
-    (OLS(), dict(model=""), "friction must be a string"),
+    (OLS(), dict(model="viscous-coulomb+offset"), r"^model must be a TorqueModel \(TorqueModel"
+     r"\.of\(robot, terms\); parse_friction reads the command line's 'a\+b' text\), got "),
     (WLS("limits"), {}, r"^sigma='limits' needs limits=\(one torque limit per joint\)$"),
     (WLS([1.0, 2.0]), {}, r"^sigma must be 3 positive finite numbers \(one per joint\)"),
     (OLS(), dict(limits=[1.0, 2.0]), "limits must be 3 positive"),
     (BoxSearch(sj.BSO(), box=([0.0], [1.0])), {}, r"box bounds must both have shape \(21,\)"),
     (BoxSearch(sj.BSO(), prior=np.zeros(5)), {}, "prior must be 36 finite full parameters"),
     (PhysicallyConsistent(prior=np.zeros(5)), {}, "prior must be 36"),
-    (OLS(), dict(smooth_velocity=0.0), "smooth_velocity must be > 0"),
     ("OLS", {}, r"estimator must be an Estimator .* got 'OLS'"),
 ])
 def test_bad_settings(rs010n, estimator, kwargs, match):
     """What only the robot or the model can tell: checked before any data are read."""
     robot, base = rs010n
-    kwargs = {"model": None, **kwargs}
+    kwargs = {"model": model_of(robot, base), **kwargs}
     with pytest.raises((ValueError, TypeError), match=match):
-        identify(robot, None, estimator, base=base, **kwargs)
+        identify(robot, None, estimator, **kwargs)
 
 
 @pytest.mark.filterwarnings("ignore:.*Scalar element defined multiple times")
 def test_a_torque_model_carries_its_own_settings(rs010n):
     robot, base = rs010n
-    model = TorqueModel.of(robot, "offset", base=base)
+    model = TorqueModel.of(robot, [Offset()], base=base)
     assert model.friction == "viscous-coulomb+offset" and model.base is base
-    with pytest.raises(ValueError, match=r"^base: part of the TorqueModel given as model"):
-        identify(robot, None, OLS(), model, base=base)
     with pytest.raises(ValueError, match="model is a TorqueModel of robot 'kuka-lwr'"):
         identify(robot, None, OLS(), TorqueModel.of(sj.robots.kuka_lwr4()))
     with pytest.raises(TypeError, match="robot must be a sedsabso_jax.Robot"):
         TorqueModel.of("rs010n")
+    with pytest.raises(TypeError, match=r"^terms must be terms \(Offset\(\), \.\.\.\), not the "
+                                        r"text 'offset': parse_friction\('offset'\) reads it$"):
+        TorqueModel.of(robot, "offset", base=base)
+    for terms, match in [((Offset(), Offset()), "^one term of each kind, got "
+                                                "'viscous-coulomb\\+offset\\+offset'$"),
+                         ((CoupledMotorFriction(),), "^friction term 'coupling' needs a "
+                                                     "transmission with a motor that turns"),
+                         (("offset",), r"^terms must be a tuple of terms")]:
+        with pytest.raises((ValueError, TypeError), match=match):
+            TorqueModel.of(robot, terms, base=base)
+    with pytest.raises(ValueError, match=r"^one torque offset per recording needs the "
+                                         r"Offset\(\) term"):
+        TorqueModel.of(robot, (), base=base, recordings=2)
+    with pytest.raises(ValueError, match=r"^SmoothCoulomb's velocity must be a number > 0, "
+                                         r"got 0\.0$"):
+        SmoothCoulomb(0.0)
 
 
 @pytest.mark.parametrize("estimator", [OLS(), WLS(), L1(), LevenbergMarquardt(),
@@ -324,21 +348,22 @@ def test_estimators_check_the_rows_they_fit(rs010n, estimator):
 def test_bad_data(rs010n):
     robot, base = rs010n
     z = np.zeros((20, 3))
+    plain = model_of(robot, base)
     with pytest.raises(ValueError, match=r"q must have shape \(samples, 3\)"):
-        identify(robot, (np.zeros((20, 2)), z, z, z), base=base)
+        identify(robot, (np.zeros((20, 2)), z, z, z), OLS(), plain)
     with pytest.raises(ValueError, match="tau contains NaN"):
-        identify(robot, (z, z, z, np.full((20, 3), np.nan)), base=base)
+        identify(robot, (z, z, z, np.full((20, 3), np.nan)), OLS(), plain)
     with pytest.raises(ValueError, match="same number of samples"):
-        identify(robot, (z, z, z, np.zeros((19, 3))), base=base)
+        identify(robot, (z, z, z, np.zeros((19, 3))), OLS(), plain)
     with pytest.raises(ValueError, match="no samples"):
-        identify(robot, (np.zeros((0, 3)),) * 4, base=base)
+        identify(robot, (np.zeros((0, 3)),) * 4, OLS(), plain)
     with pytest.raises(ValueError, match=r"data must be a Measurements or a tuple \(q, qd, "
                                          r"qdd, tau\) of arrays, got ndarray"):
-        identify(robot, z, base=base)
+        identify(robot, z, OLS(), plain)
     with pytest.raises(TypeError, match="robot must be"):
         identify("robot", (z, z, z, z))
     with pytest.raises(ValueError, match="base must be"):
-        identify(robot, (z, z, z, z), base="base")
+        TorqueModel.of(robot, base="base")
 
 
 # ------------------------------------------------- each estimator against a closed form
@@ -350,7 +375,7 @@ def noisy(rs010n):
     q, qd, qdd = states(rng, 3)
     tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd)) + [2.0, -1.0, 0.5]
     tau = tau + np.array([2.0, 0.5, 0.1]) * rng.standard_t(3, tau.shape)
-    model = TorqueModel.of(robot, "offset", base=base)
+    model = model_of(robot, base, Offset())
     Y = model.regressor(q, qd, qdd)
     return (q, qd, qdd, tau), model, Y.reshape(-1, model.dim), tau.reshape(-1)
 
@@ -408,18 +433,24 @@ def test_box_search_takes_any_optimiser_and_its_box(noisy):
     data, model, W, b = noisy
     x = np.linalg.lstsq(W, b, rcond=None)[0]
     lower, upper = x - 0.5, x + 0.5
-    ident = identify(model.robot, data, BoxSearch(sj.BSO(), box=(lower, upper), runs=3,
-                                                  iterations=20, seed=1), model)
+    with pytest.warns(UserWarning, match="parameters ended on the box's faces"):
+        ident = identify(model.robot, data, BoxSearch(sj.BSO(), box=(lower, upper), runs=3,
+                                                      iterations=20, seed=1), model)
     assert ident.method == "BSO" and ident.settings["box"] == "explicit"
     assert np.all((ident.values >= lower) & (ident.values <= upper))
     f = np.asarray(ident.result.f)
     assert ident.settings["best_run"] == int(np.argmin(f))
     assert ident.fit["l1"] == pytest.approx(f.min(), rel=1e-9)
     pytest.importorskip("evosax")
-    cma = identify(model.robot, data, BoxSearch(sj.Evosax("CMA_ES"), box=(lower, upper),
-                                                iterations=20), model)
+    width = np.abs(x) + 1.0  # CMA-ES converges inside a box wide enough: no face, no warning
+    lower, upper = x - 0.5 * width, x + 0.5 * width
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        cma = identify(model.robot, data, BoxSearch(sj.Evosax("CMA_ES"), box=(lower, upper),
+                                                    iterations=100), model)
     assert cma.method == "evosax CMA_ES"
     assert np.all((cma.values >= lower) & (cma.values <= upper))
+    assert cma.settings["at_bounds"] == {"count": 0, "names": [], "tolerance": 1e-3}
 
 
 def test_estimators_by_name():
@@ -429,56 +460,6 @@ def test_estimators_by_name():
     swarm = Estimator.named("LDWPSO", runs=3, iterations=7, sigma="residual")
     assert (swarm.solver, swarm.runs, swarm.iterations, swarm.sigma) == (
         sj.LDWPSO.paper(), 3, 7, "residual")
-
-
-# ----------------------------------------------------------------- 0.2's call form
-@pytest.mark.parametrize("old, new", [
-    (dict(), OLS()),
-    (dict(method="OLS", sigma="limits"), OLS("limits")),
-    (dict(method="WLS"), WLS(None)),
-    (dict(method="WLS", sigma=[1.0, 2.0, 3.0]), WLS([1.0, 2.0, 3.0])),
-    (dict(method="L1", sigma="residual"), L1("residual")),
-    (dict(method="LM"), LevenbergMarquardt()),
-    (dict(method="BSO", runs=2, iterations=5, seed=4, box=(0.2, 0.1)),
-     BoxSearch(sj.BSO.paper(), box=(0.2, 0.1), runs=2, iterations=5, seed=4)),
-    (dict(method="WLS", sigma="limits", physical=True, prior_strength=1e-3),
-     PhysicallyConsistent(WLS("limits"), prior_strength=1e-3)),
-], ids=lambda v: repr(v) if isinstance(v, dict) else "")
-def test_old_call_form_gives_identical_numbers(noisy, old, new):
-    """identify(robot, q, qd, qdd, tau, method=..., friction=..., ...) still works, with a
-    DeprecationWarning at the caller's line, and is the new call exactly."""
-    data, model, _, _ = noisy
-    limits = [100.0, 80.0, 20.0]
-    with pytest.deprecated_call(match=r"identify\(robot, q, qd, qdd, tau, method=\.\.\., "
-                                      r"friction=\.\.\., \.\.\.\) is deprecated .*use "
-                                      r"identify\(robot, \(q, qd, qdd, tau\), estimator, "
-                                      r"model\)") as record:
-        before = identify(model.robot, *data, friction="offset", limits=limits,
-                          base=model.base, **old)
-    assert record[0].filename == __file__
-    after = identify(model.robot, data, new, model, limits=limits)
-    np.testing.assert_array_equal(before.values, after.values)
-    assert before.estimator == after.estimator
-    times = ("seconds", "compile_s", "run_s")
-    assert {k: v for k, v in before.fit.items() if k not in times} == {
-        k: v for k, v in after.fit.items() if k not in times}
-    strip = lambda s: {k: v for k, v in s.items() if k not in times + ("physical_fit",)}  # noqa: E731
-    assert strip(before.settings) == strip(after.settings)
-
-
-def test_old_call_form_checks_what_it_did(rs010n):
-    robot, base = rs010n
-    z = np.zeros((20, 3))
-    for kwargs, match in [(dict(method="GA"), "method must be one of"),
-                          (dict(method="L1", physical=True), "physical=True is a least-squares "
-                                                             "fit: use method 'OLS' or 'WLS'"),
-                          (dict(method="BSO", solver=sj.LDWPSO()), "solver must be a BSO"),
-                          (dict(prior=np.zeros(5)), "prior must be 36")]:
-        with pytest.deprecated_call(), pytest.raises(ValueError, match=match):
-            identify(robot, z, z, z, z, base=base, **kwargs)
-    with pytest.deprecated_call(), pytest.raises(TypeError, match="unexpected keyword "
-                                                                  "argument 'metod'"):
-        identify(robot, z, z, z, z, metod="OLS")
 
 
 # ---------------------------------------------------------------------- real KUKA data
@@ -495,8 +476,9 @@ def test_kuka_held_out():
     base = sj.base_parameters(robot)
     train, test = _kuka(1), _kuka(2)
 
-    def held_out(estimator=OLS(), friction=None):
-        ident = identify(robot, train, estimator, friction, base=base, limits=KUKA_LIMITS)
+    def held_out(estimator=OLS(), friction="viscous-coulomb"):
+        model = TorqueModel.of(robot, parse_friction(friction), base=base)
+        ident = identify(robot, train, estimator, model, limits=KUKA_LIMITS)
         predicted = ident.predict(*test[:3])
         return ident, validation_metrics(test[3], predicted, KUKA_LIMITS).nrms_limits_percent
 
@@ -508,3 +490,158 @@ def test_kuka_held_out():
     phys, value = held_out(PhysicallyConsistent(WLS("limits")), "offset")
     assert is_physically_consistent(phys.full_params)
     assert value <= 0.17
+
+
+# ------------------------------------------------------- the torque model's terms
+def test_terms_columns_are_their_closed_forms(rs010n, rng):
+    """Each term's columns, read from the model's regressor by name: a constant per joint,
+    qd|qd|, tanh(qd / v) in the Coulomb columns, the rotor inertia and the coupled motor's
+    friction through the transmission K (K[m, j] (K_m . qdd), K[m, j] (K_m . qd) and
+    K[m, j] sign(K_m . qd)); the other base columns untouched."""
+    robot, base = rs010n
+    K = np.array([[2.0, 0.0, 0.0], [0.0, 3.0, 0.0], [0.0, 0.5, 4.0]])  # motor 3 turns 2 and 3
+    terms = (SmoothCoulomb(0.1), CoupledMotorFriction(), Armature(), Quadratic(), Offset())
+    model = TorqueModel.of(robot, terms, transmission=K, base=base)
+    assert model.friction == "viscous-coulomb+offset+quadratic+smooth+armature+coupling"
+    assert model.terms == (Offset(), Quadratic(), SmoothCoulomb(0.1), Armature(),
+                           CoupledMotorFriction())  # column order, whatever the order given
+    q, qd, qdd = states(rng, 3, T=40)
+    Y = model.regressor(q, qd, qdd)
+    col = dict(zip(model.names, np.moveaxis(Y, -1, 0)))  # name -> (T, n)
+    eye = np.eye(3)
+    expected = {}
+    for j in range(3):
+        expected[f"OFF{j + 1}"] = np.tile(eye[j], (40, 1))
+        expected[f"FQ{j + 1}"] = (qd * np.abs(qd))[:, [j]] * eye[j]
+        expected[f"FC{j + 1}"] = np.tanh(qd / 0.1)[:, [j]] * eye[j]
+        expected[f"IA{j + 1}"] = (qdd @ K[j])[:, None] * K[j]
+    expected["FVM3"] = (qd @ K[2])[:, None] * K[2]
+    expected["FCM3"] = np.sign(qd @ K[2])[:, None] * K[2]
+    assert model.regrouped == ("IA1", "IA2")  # in the base regressor's span
+    assert model.names[base.rank:] == ("OFF1", "OFF2", "OFF3", "FQ1", "FQ2", "FQ3", "IA3",
+                                       "FVM3", "FCM3")
+    for name, value in expected.items():
+        if name in col:
+            np.testing.assert_allclose(col[name], value, atol=1e-14, err_msg=name)
+    rigid = np.asarray(base.regressor(q, qd, qdd))
+    others = [i for i, n in enumerate(base.names) if not n.startswith("FC")]
+    np.testing.assert_array_equal(Y[..., others], rigid[..., others])
+    assert model.nonnegative.tolist() == [False] * (base.rank + 3) + [True] * 6
+    assert model.settings()["smooth_velocity"] == 0.1 and model.settings()["regrouped"] == [
+        "IA1", "IA2"]
+
+
+def test_offsets_per_recording(rs010n, rng):
+    """One offset per joint and recording: OFFj.r, 1 in the sample's recording's column,
+    1/R in each without a recording."""
+    robot, base = rs010n
+    model = TorqueModel.of(robot, (Offset(),), base=base, recordings=2)
+    assert model.names[base.rank:] == ("OFF1.1", "OFF1.2", "OFF2.1", "OFF2.2", "OFF3.1",
+                                       "OFF3.2")
+    q, qd, qdd = states(rng, 3, T=4)
+    Y = model.regressor(q, qd, qdd, np.array([0, 1, 1, 0]))[..., base.rank:]
+    np.testing.assert_array_equal(Y[1, 0], [0, 1, 0, 0, 0, 0])
+    np.testing.assert_array_equal(Y[0, 2], [0, 0, 0, 0, 1, 0])
+    np.testing.assert_array_equal(model.regressor(q, qd, qdd)[2, 1, base.rank:],
+                                  [0, 0, 0.5, 0.5, 0, 0])
+    assert model.settings() == {"offset_per_recording": 2}
+    with pytest.raises(ValueError, match=r"recording must hold one integer in \[0, 2\)"):
+        model.regressor(q, qd, qdd, np.array([0, 1, 2, 0]))
+
+
+def test_parse_friction_reads_the_command_lines_text():
+    assert parse_friction("viscous-coulomb") == ()
+    assert parse_friction("quadratic+viscous-coulomb+offset") == (Offset(), Quadratic())
+    assert parse_friction("offset+smooth+offset") == (Offset(), SmoothCoulomb())
+    assert parse_friction("coupling+armature") == (Armature(), CoupledMotorFriction())
+    for text, match in [("viscous-coulomb+glue", r"^unknown friction term\(s\) \['glue'\]; "
+                         r"known: \('viscous-coulomb', 'offset', 'quadratic', 'smooth', "
+                         r"'armature', 'coupling'\) \(joined by '\+', e\.g\. "
+                         r"'viscous-coulomb\+offset'\)$"),
+                        ("", "^friction must be a string of terms joined by '\\+'"),
+                        (None, "^friction must be a string")]:
+        with pytest.raises(ValueError, match=match):
+            parse_friction(text)
+    assert sj.identification.FRICTION_TERMS == ("viscous-coulomb", "offset", "quadratic",
+                                                "smooth", "armature", "coupling")
+
+
+def test_candidate_models(rs010n):
+    """The default candidates: the coupled motor's friction added where the transmission
+    couples, one offset per recording added for several (the plain model and the offset
+    model then one), the base parameters computed once."""
+    from sedsabso_jax.identification import FRICTION_CANDIDATES, candidate_models
+
+    robot, base = rs010n
+    plain = candidate_models(robot, base=base)
+    assert [m.friction for m in plain] == ["viscous-coulomb", "viscous-coulomb+offset",
+                                           "viscous-coulomb+offset+armature",
+                                           "viscous-coulomb+offset+quadratic+smooth"]
+    assert all(m.base is base for m in plain) and len(FRICTION_CANDIDATES) == 4
+    coupled = sj.Transmission.from_gear_ratios([1.0, 1.0, 1.0], coupling={(3, 2): 1.0})
+    per = candidate_models(robot, transmission=coupled, recordings=3)
+    assert [m.friction for m in per] == ["viscous-coulomb+offset+coupling",
+                                         "viscous-coulomb+offset+armature+coupling",
+                                         "viscous-coulomb+offset+quadratic+smooth+coupling"]
+    assert {m.recordings for m in per} == {3} and len({id(m.base) for m in per}) == 1
+    assert [m.friction for m in candidate_models(robot, [(Quadratic(),)], base=base)] == [
+        "viscous-coulomb+quadratic"]
+
+
+# ------------------------------------------------------------- estimators as objects
+def test_estimators_answer_for_themselves():
+    """What the orchestration asks an estimator: properties and methods, never its class;
+    equinox modules, abstract or final, variants by dataclasses.replace."""
+    import dataclasses
+
+    import equinox as eqx
+
+    from sedsabso_jax.identification import AbstractLeastSquares
+
+    box = BoxSearch(sj.BSO(), iterations=2)
+    table = {OLS(): (False, False, True, False), WLS("limits"): (False, False, True, True),
+             L1(): (False, False, False, False), LevenbergMarquardt(): (False, False, False,
+                                                                        False),
+             box: (False, True, False, False),
+             PhysicallyConsistent(WLS("limits")): (True, False, True, True)}
+    for e, answers in table.items():
+        assert isinstance(e, eqx.Module)
+        assert (e.physical, e.costly, e.normal_equations, e.needs_limits) == answers, e
+    assert OLS().physically_consistent() == PhysicallyConsistent(OLS())
+    pc = PhysicallyConsistent(WLS(), prior_strength=1e-3)
+    assert pc.physically_consistent() is pc and pc.name == "WLS" and pc.weights == "residual"
+    for e in (L1(), LevenbergMarquardt(), box):
+        with pytest.raises(ValueError, match=f"^a physically consistent fit is a least-squares "
+                                             f"fit: use method 'OLS' or 'WLS', not "
+                                             f"'{e.name}'$"):
+            e.physically_consistent()
+    assert dataclasses.replace(pc, prior_strength=0.5).prior_strength == 0.5
+    assert BoxSearch("SEDSABSO") == BoxSearch(sj.SEDSABSO.paper())
+    for abstract in (Estimator, AbstractLeastSquares, sj.identification.AbstractTerm):
+        with pytest.raises(TypeError, match="abstract"):
+            abstract()
+
+
+def test_box_search_reports_parameters_on_its_faces(noisy):
+    """A box too small for the data holds the fit back: the parameters that end on its
+    faces (within 0.1 % of the box's width) are counted and named in the settings, and a
+    warning at the caller's line says so (a box wide enough: none,
+    test_box_search_takes_any_optimiser_and_its_box)."""
+    from sedsabso_jax.identification import FACE_TOLERANCE
+
+    data, model, W, b = noisy
+    x = np.linalg.lstsq(W, b, rcond=None)[0]
+    width = np.abs(x) + 1.0
+    lower, upper = x + 0.5 * width, x + 0.6 * width  # the optimum below every coordinate
+    small = BoxSearch(sj.LDWPSO(), box=(lower, upper), iterations=30)
+    with pytest.warns(UserWarning, match=r"^LDWPSO: (\d+) of 24 parameters ended on the "
+                                         r"box's faces \(.*\): the box may hold the fit back "
+                                         r"\(widen it") as record:
+        ident = identify(model.robot, data, small, model)
+    faces = ident.settings["at_bounds"]
+    assert faces["count"] >= 12 and faces["tolerance"] == FACE_TOLERANCE == 1e-3
+    assert record[0].filename == __file__ and f"{faces['count']} of 24" in str(
+        record[0].message)
+    on = [n for n, v, lo, hi in zip(ident.names, ident.values, lower, upper)
+          if min(v - lo, hi - v) <= 1e-3 * (hi - lo)]
+    assert faces["names"] == on and faces["count"] == len(on)

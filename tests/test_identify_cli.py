@@ -257,8 +257,8 @@ def _without_times(value):
     ([], {}),
     (["--physical", "--method", "OLS", "--weights", "equal", "--friction", "offset",
       "--prior-strength", "1e-3"],
-     dict(estimators=sj.OLS(), frictions="viscous-coulomb+offset", physical=True,
-          prior_strength=1e-3)),
+     dict(estimators=sj.OLS(), models=sj.TorqueModel.of(sj.robots.rs010n(), [sj.Offset()]),
+          physical=True, prior_strength=1e-3)),
 ], ids=["default", "physical"])
 def test_the_command_is_one_library_call(flags, call, rs010n_files, tmp_path, capsys):
     """``sedsabso-jax identify`` prints and writes the report of
@@ -281,15 +281,49 @@ def test_the_command_is_one_library_call(flags, call, rs010n_files, tmp_path, ca
 def test_select_and_identify_checks_its_arguments(rs010n_files):
     robot = sj.robots.rs010n()
     data = sj.load_measurements(rs010n_files[0], n_joints=3)
-    for kwargs, match in [(dict(prior_strength=1e-3), "prior_strength needs physical=True"),
-                          (dict(folds=0), "folds=0 turns validation off"),
-                          (dict(physical=True, estimators=sj.L1()), "physical=True is a "
-                           "least-squares fit: use method 'OLS' or 'WLS', not 'L1'"),
-                          (dict(physical=True, prior_strength="cv", folds=0,
-                                estimators=sj.OLS(), frictions="offset"),
-                           "prior_strength='cv' chooses by validation")]:
-        with pytest.raises(ValueError, match=match):
+    one = dict(estimators=sj.OLS(), models=sj.TorqueModel.of(robot, [sj.Offset()]))
+    for kwargs, match in [
+            (dict(prior_strength=1e-3), "^prior_strength needs physical=True: the pull to the "
+             "a-priori parameters is part of the physically consistent fit$"),
+            (dict(validation=None), "^validation=None turns validation off, so nothing can be "
+             "chosen by it: give one estimator and one torque model$"),
+            (dict(physical=True, estimators=sj.L1()), "^a physically consistent fit is a "
+             "least-squares fit: use method 'OLS' or 'WLS', not 'L1'$"),
+            (dict(physical=True, prior_strength="cv", validation=None, **one),
+             r"^prior_strength='cv' chooses by validation, which validation=None turns off: "
+             r"give a number$"),
+            (dict(physical="yes"), "^physical must be None"),
+            (dict(physical=True, prior_strength=-1.0), "^prior_strength must be a number >= 0 "
+             "or 'cv', got -1.0$"),
+            (dict(validation=sj.RecordingFolds()), r"^validation \(recording folds\) needs "
+             r"several recordings$"),
+            (dict(models="viscous-coulomb+offset", **{k: v for k, v in one.items()
+                                                      if k != "models"}),
+             "^model must be a TorqueModel")]:
+        with pytest.raises((ValueError, TypeError), match=match):
             sj.select_and_identify(robot, data, **kwargs)
+
+
+def test_the_command_asks_the_library_for_its_rules():
+    """The command's flags go through the library's Choice (its rules, the flags' names):
+    the same one-line errors, before any data are read."""
+    from sedsabso_jax.identification import Choice, DefaultValidation, Names
+
+    flags = Names(physical="--physical", no_validation="--folds 0")
+    with pytest.raises(ValueError, match="^prior_strength needs --physical"):
+        Choice(prior_strength=1e-3, names=flags)
+    with pytest.raises(ValueError, match="^--folds 0 turns validation off"):
+        Choice(None, candidates=2, names=flags)
+    with pytest.raises(ValueError, match=r"^one torque offset per recording needs several "
+                                         r"recordings$"):
+        Choice(offset_per_recording=True)
+    with pytest.raises(ValueError, match=r"^folds must be an integer >= 2, got 1$"):
+        DefaultValidation(1)
+    assert Choice(None, candidates=1).validation is None
+    assert DefaultValidation(3).of([None]).settings() == sj.Pooled(
+        (sj.PhaseFolds(3), sj.SpeedSplits())).settings()
+    assert DefaultValidation().of([None, None]).settings() == sj.Pooled(
+        (sj.RecordingFolds(), sj.SpeedSplits())).settings()
 
 
 def test_estimator_candidates_are_the_commands_policy():

@@ -188,19 +188,6 @@ def test_one_import_path_per_public_name():
             "sedsabso_jax.robots.rs010n"} <= set(seen.values())
 
 
-def test_old_paths_warn_and_name_the_new_one():
-    import sedsabso_jax as sj
-    from sedsabso_jax import optim
-
-    with pytest.warns(DeprecationWarning, match="use sedsabso_jax.minimise"):
-        assert optim.minimise is sj.minimise
-    shim = importlib.import_module("sedsabso_jax.identification.validation")
-    with pytest.warns(DeprecationWarning, match="use sedsabso_jax.select_model"):
-        assert shim.select_model is sj.select_model
-    with pytest.raises(AttributeError):
-        optim.no_such_name  # noqa: B018
-
-
 REPO = ROOT.parent
 
 

@@ -402,8 +402,9 @@ ROWS = [[i / 100.0, 0.1 * i, 0.2, 1.0, 2.0] for i in range(40)]
         (["q1", "q2", "tau1", "tau2"], [r[1:] for r in ROWS], r"column 'time': missing"),
         (["time", "q1", "q2"], [r[:3] for r in ROWS],
          r"field 'torques': missing columns tau1..taun"),
-        (HEADER[:3] + ["tau1", "tau3"], ROWS, r"field 'torques': expected columns tau1..tau2 "
-                                              r"\(joints numbered from 1, no gaps\), got"),
+        (HEADER[:3] + ["tau1", "tau3"], ROWS, r"field 'torques': missing columns tau2 \(expected "
+                                              r"tau1..tau3, joints numbered from 1\), got joint "
+                                              r"numbers \[1, 3\]"),
         (HEADER[:3] + ["tau1"], [r[:4] for r in ROWS],
          r"field 'torques': expected 2 joints \(as 'positions'\), got 1"),
         (HEADER, ROWS[:5] + [ROWS[5][:4]] + ROWS[6:],
@@ -425,6 +426,23 @@ ROWS = [[i / 100.0, 0.1 * i, 0.2, 1.0, 2.0] for i in range(40)]
 )
 def test_bad_csv(tmp_path, names, rows, match):
     expect_error(write_csv(tmp_path / "bad.csv", names, rows), match)
+
+
+def test_a_missing_column_is_named(tmp_path):
+    """A 7-joint recording without tau3 (or without tau7): the message names the missing
+    column and the range expected, not the range of the columns found."""
+    names = ["time", *(f"q{j}" for j in range(1, 8)), *(f"tau{j}" for j in range(1, 8))]
+    rows = [[i / 100.0, *np.zeros(14)] for i in range(40)]
+    for gone in (3, 7):
+        keep = [k for k, n in enumerate(names) if n != f"tau{gone}"]
+        path = write_csv(tmp_path / f"no_tau{gone}.csv", [names[k] for k in keep],
+                         [[r[k] for k in keep] for r in rows])
+        with pytest.raises(ValueError, match=rf"field 'torques': missing columns tau{gone} "
+                                             rf"\(expected tau1..tau7, joints numbered from "
+                                             rf"1\)"):
+            load_measurements(path, n_joints=7)
+    with pytest.raises(ValueError, match=r"missing columns tau3 \(expected tau1..tau7"):
+        load_measurements(tmp_path / "no_tau3.csv")  # the joint count from the columns
 
 
 # --------------------------------------------------------------------------------------

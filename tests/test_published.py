@@ -90,7 +90,7 @@ def test_tx40_terms_in_figaroh_convention(rng):
     K = np.diag([32.0, 32.0, 45.0, -48.0, 45.0, 32.0])
     K[5, 4] = 32.0
     model = TorqueModel(sj.base_parameters(sj.robots.staubli_tx40()),
-                        "viscous-coulomb+offset+armature+coupling", transmission=K)
+                        (sj.Offset(), sj.Armature(), sj.CoupledMotorFriction()), transmission=K)
     assert model.regrouped == ("IA1", "IA2")
     names = model.names
     terms = [i for i, n in enumerate(names)

@@ -21,7 +21,7 @@ def problem():
     robot = sj.robots.rs010n()
     rng = np.random.default_rng(11)
     q, qd, qdd = rng.uniform(-1.5, 1.5, (3, SAMPLES, robot.n_joints))
-    model = sj.TorqueModel.of(robot, "viscous-coulomb")
+    model = sj.TorqueModel.of(robot)
     Y = model.regressor(q, qd, qdd)
     true = np.asarray(model.base.values)
     return robot, model, Y, true, (q, qd, qdd)

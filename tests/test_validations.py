@@ -62,8 +62,6 @@ def test_recording_folds_leave_one_recording_out():
     np.testing.assert_array_equal(splits.test[1], np.r_[np.zeros(300), np.ones(200)] == 1)
     with pytest.raises(ValueError, match="needs at least 2 recordings"):
         sj.RecordingFolds().splits([a])
-    with pytest.raises(ValueError, match="give folds or validation, not both"):
-        sj.cross_validate(sj.robots.rs010n(), a, folds=3, validation=sj.PhaseFolds())
     with pytest.raises(TypeError, match="validation must be a Validation"):
         sj.cross_validate(sj.robots.rs010n(), a, validation="speed")
 
@@ -79,9 +77,11 @@ def test_pooled_splits_are_both_validations_and_score_each_part():
     assert splits.parts == ("phase folds",) * 4 + ("speed splits",) * 3
     for a, b in zip(splits.test, phase.test + speed.test):
         np.testing.assert_array_equal(a, b)
-    cv = sj.cross_validate(sj.robots.rs010n(), data, sj.OLS(), "offset", validation=pooled)
-    alone = {v.kind: sj.cross_validate(sj.robots.rs010n(), data, sj.OLS(), "offset",
-                                       validation=v).score for v in pooled.validations}
+    robot = sj.robots.rs010n()
+    model = sj.TorqueModel.of(robot, (sj.Offset(),))
+    cv = sj.cross_validate(robot, data, sj.OLS(), model, validation=pooled)
+    alone = {v.kind: sj.cross_validate(robot, data, sj.OLS(), model, validation=v).score
+             for v in pooled.validations}
     assert cv.part_scores == pytest.approx(alone, rel=1e-12)
     assert cv.score == pytest.approx((4 * alone["phase folds"] + 3 * alone["speed splits"]) / 7)
     with pytest.raises(ValueError, match="Pooled needs at least two validations"):
@@ -95,7 +95,7 @@ def test_the_rule_prefers_the_physically_consistent_fit_within_a_standard_error(
     data = _run(3, noise=0.05)
     sel = sj.select_model(sj.robots.rs010n(), data,
                           estimators=(sj.OLS(), sj.PhysicallyConsistent()),
-                          frictions="viscous-coulomb",
+                          models=sj.TorqueModel.of(sj.robots.rs010n()),
                           validation=sj.Pooled((sj.PhaseFolds(), sj.SpeedSplits())))
     assert sel.best["physical"] is False and sel.chosen["physical"] is True
     assert isinstance(sel.estimator, sj.PhysicallyConsistent)
@@ -110,7 +110,7 @@ def test_fits_on_normal_equations_are_least_squares_on_the_rows(sigma):
     acting on the joint) to 1e-9."""
     data = _run(3, noise=0.2)
     limits = np.array([300.0, 200.0, 50.0])
-    model = sj.TorqueModel.of(sj.robots.rs010n(), "viscous-coulomb+offset")
+    model = sj.TorqueModel.of(sj.robots.rs010n(), (sj.Offset(),))
     Y = model.regressor(data.q, data.qd, data.qdd)
     keep = np.arange(len(Y)) % 4 != 0  # most samples: all minus the left-out rows
     slow = np.abs(data.qd[:, 0]) < 0.3 * np.abs(data.qd[:, 0]).max()  # a minority
@@ -136,7 +136,7 @@ def test_physical_fit_is_the_same_on_rows_and_normal_equations_and_repeats_exact
     gives the rows' fit (1e-7 of the torques), and the same call twice gives the same
     numbers to the last bit, the first after the programme is built included."""
     data = _run(4, noise=0.2)
-    model = sj.TorqueModel.of(sj.robots.rs010n(), "viscous-coulomb+offset")
+    model = sj.TorqueModel.of(sj.robots.rs010n(), (sj.Offset(),))
     Y = model.regressor(data.q, data.qd, data.qdd)
     mask = np.abs(data.qd[:, 1]) < 0.7 * np.abs(data.qd[:, 1]).max()
     estimator = sj.PhysicallyConsistent(sj.WLS("residual"), prior_strength=1e-4)
@@ -157,7 +157,8 @@ def test_one_offset_per_recording():
     robot = sj.robots.rs010n()
     a = _run(5, offset=(2.0, 0.5, 0.0), noise=0.002)
     b = _run(6, offset=(-1.0, 0.5, 0.0), noise=0.002)
-    per = sj.identify(robot, [a, b], sj.OLS(), "viscous-coulomb", offset_per_recording=True)
+    per = sj.identify(robot, [a, b], sj.OLS(), sj.TorqueModel.of(robot, [sj.Offset()],
+                                                                   recordings=2))
     values = dict(zip(per.names, per.values))
     assert per.model.friction == "viscous-coulomb+offset" and per.model.recordings == 2
     assert values["OFF1.1"] == pytest.approx(2.0, abs=0.01)
@@ -166,10 +167,14 @@ def test_one_offset_per_recording():
     mean = per.predict(q, q, q) - per.model.predict(per.values, q, q, q, np.array([0]))
     expected = (values["OFF1.1"] + values["OFF1.2"]) / 2 - values["OFF1.1"]
     assert mean[0, 0] == pytest.approx(expected, abs=1e-9)
-    one = sj.identify(robot, [a, b], sj.OLS(), "viscous-coulomb+offset")
+    one = sj.identify(robot, [a, b], sj.OLS(), sj.TorqueModel.of(robot, [sj.Offset()]))
     assert one.fit["rms"][0] > 10 * per.fit["rms"][0]
-    with pytest.raises(ValueError, match="offset_per_recording needs several recordings"):
-        sj.identify(robot, a, sj.OLS(), offset_per_recording=True)
+    with pytest.raises(ValueError, match=r"^the torque model has one offset per recording for "
+                                         r"2 recordings; the data hold 1$"):
+        sj.identify(robot, a, sj.OLS(), per.model)
+    with pytest.raises(ValueError, match="^one torque offset per recording needs several "
+                                         "recordings$"):
+        sj.select_and_identify(robot, a, models=per.model, estimators=sj.OLS())
 
 
 def test_several_recordings_must_share_robot_and_rate():
@@ -230,9 +235,9 @@ def test_physical_friction_stays_physical_beyond_the_fitted_speeds():
     torque opposes the motion at any speed."""
     robot = sj.robots.rs010n()
     data = _run(9, friction=lambda qd: 5.0 * np.tanh(qd / 0.3))
-    friction = "viscous-coulomb+quadratic"
-    free = sj.identify(robot, data, sj.OLS(), friction)
-    physical = sj.identify(robot, data, sj.PhysicallyConsistent(), friction)
+    model = sj.TorqueModel.of(robot, [sj.Quadratic()])
+    free = sj.identify(robot, data, sj.OLS(), model)
+    physical = sj.identify(robot, data, sj.PhysicallyConsistent(), model)
 
     def friction_torque(fit, speed):
         v = dict(zip(fit.names, fit.values))

@@ -93,33 +93,51 @@ def _urdf_source(robot: str) -> AbstractContextManager[Any]:
     return contextlib.nullcontext(robot if robot.lower().endswith(".urdf") else None)
 
 
+def _choice(args: argparse.Namespace, physical: bool | None, candidates: int) -> Any:
+    """The library's :class:`~sedsabso_jax.identification.Choice` of the flags (its rules
+    checked, named by the flags), before any data are loaded."""
+    from ..identification._auto import Choice, DefaultValidation, Names
+    from ..identification._splits import PhaseFolds, RecordingFolds, SpeedSplits
+
+    names = Names(physical="--physical", prior_strength="--prior-strength",
+                  prior_cv="--prior-strength cv", no_validation="--folds 0",
+                  one_candidate="give --method, --weights and --friction (the fit is "
+                  "unconstrained unless --physical)",
+                  offset_per_recording="--offset-per-recording",
+                  validation=f"--validation {args.validation}", several="several --data files")
+    validation: Any = None  # --folds 0: none
+    if args.folds != 0 and args.validation == "pooled":
+        validation = DefaultValidation(args.folds)
+    elif args.folds != 0 and args.validation == "phase":
+        validation = PhaseFolds(args.folds)
+    elif args.folds != 0:
+        validation = SpeedSplits() if args.validation == "speed" else RecordingFolds()
+    return Choice(validation, physical, args.prior_strength, candidates, len(args.data),
+                  args.offset_per_recording, names)
+
+
 def run(args: argparse.Namespace) -> None:
     """The subcommand: check the flags, load, build the objects, one call, print, write."""
     from ..dynamics import _robots as robots
-    from ..identification._splits import PhaseFolds, RecordingFolds, SpeedSplits
     from ..dynamics._limits import joint_limits
     from ..identification._auto import estimator_candidates, select_and_identify
     from ..identification._identify import recordings_of
-    from ..identification._validation import FRICTION_CANDIDATES
+    from ..identification._model import FRICTION_CANDIDATES, candidate_models
+    from ..identification._terms import parse_friction
     from ..measurements._load import load_measurements
 
     check_writable(args.out, args.json, args.urdf_out)
-    if args.prior_strength != 0.0 and not args.physical:
-        raise ValueError("--prior-strength needs --physical: the pull to the a-priori "
-                         "parameters is part of the physically consistent fit")
-    if args.prior_strength == "cv" and args.folds == 0:
-        raise ValueError("--prior-strength cv chooses by validation, which --folds 0 "
-                         "turns off: give a number")
     if args.urdf_out is not None and args.physical is False:
         raise ValueError("--urdf-out needs physically consistent link parameters, which "
                          "--no-physical rules out")
-    if args.offset_per_recording and len(args.data) < 2:
-        raise ValueError("--offset-per-recording needs several --data files")
-    if args.validation == "recordings" and len(args.data) < 2:
-        raise ValueError("--validation recordings (leave one recording out) needs several "
-                         "--data files")
     # --urdf-out: a simulator's URDF needs physically consistent link parameters
     physical = True if args.urdf_out is not None else args.physical
+    frictions = FRICTION_CANDIDATES if args.friction == AUTO else (
+        parse_friction(args.friction),)
+    estimators = estimator_candidates(None if args.method == AUTO else args.method,
+                                      args.weights, runs=args.runs,
+                                      iterations=args.iterations, seed=args.seed)
+    choice = _choice(args, physical, len(frictions) * len(estimators))
     urdf_source = _urdf_source(args.robot)
     with urdf_source as source:
         if (args.urdf_out is not None and source is not None
@@ -138,27 +156,16 @@ def run(args: argparse.Namespace) -> None:
         held_out = None if held_out is None else transmission.to_joint_side(held_out)
     data = recordings_of(robot, data)  # one rate and the robot's joints, or exit 2 now
     limits = joint_limits(args.robot, robot).torque_limits
-    if args.weights == "limits" and limits is None:
+    if limits is None and all(e.needs_limits for e in estimators):
         raise ValueError(f"--weights limits: no torque limits known for --robot {args.robot} "
                          f"(a URDF's <limit effort=...>)")
-    estimators = estimator_candidates(None if args.method == AUTO else args.method,
-                                      args.weights, runs=args.runs,
-                                      iterations=args.iterations, seed=args.seed)
-    frictions = FRICTION_CANDIDATES if args.friction == AUTO else (args.friction,)
-    if args.folds == 0 and len(frictions) * len(estimators) > 1:
-        raise ValueError("--folds 0 turns validation off, so nothing can be chosen by it: "
-                         "give --method, --weights and --friction (the fit is unconstrained "
-                         "unless --physical)")
-    validation = None if args.folds == 0 else {
-        "pooled": None, "speed": SpeedSplits(), "phase": PhaseFolds(args.folds),
-        "recordings": RecordingFolds()}[args.validation]  # None: the default, pooled
+    models = candidate_models(robot, frictions, transmission=transmission,
+                              recordings=len(data) if args.offset_per_recording else 1)
     with Progress("identify") as progress:  # validation fits, conic solves
         report = select_and_identify(robot, data, held_out=held_out, limits=limits,
-                                     transmission=transmission, estimators=estimators,
-                                     frictions=frictions, validation=validation,
-                                     folds=args.folds, physical=physical,
-                                     prior_strength=args.prior_strength,
-                                     offset_per_recording=args.offset_per_recording,
+                                     models=models, estimators=estimators,
+                                     validation=choice.validation, physical=physical,
+                                     prior_strength=choice.prior_strength,
                                      progress=progress)
     paths = [os.path.abspath(p) for p in args.data]
     settings = {"robot": args.robot, "data": paths[0] if len(paths) == 1 else paths,
@@ -176,7 +183,7 @@ def run(args: argparse.Namespace) -> None:
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The ``identify`` subcommand's flags, in groups."""
     from ..identification._fitting import Estimator
-    from ..identification._model import FRICTION_TERMS
+    from ..identification._terms import FRICTION_TERMS
     from ..identification._validation import PRIOR_STRENGTHS
 
     ip = subcommand(

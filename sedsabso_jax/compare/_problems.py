@@ -35,10 +35,12 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from ..dynamics._robots import kuka_lwr4
-from ..identification._identify import prepare, swarm_box
+from ..identification._box_search import BoxSearch
+from ..identification._model import TorqueModel
 from ..measurements._load import load_kuka_lwr4
 from ..optim._fitness import BlackBox, L1Residual
 from ..optim._linear import l1_solve_box
+from ..optim._sedsabso import SEDSABSO
 from ..reproduce._experiment import Settings, build_problem
 
 SUITES = ("bbob", "identification", "all")
@@ -216,13 +218,13 @@ def identification_problem(name: str) -> Problem:
     if name == "kuka-real":
         robot = kuka_lwr4()
         data = load_kuka_lwr4(1)
-        setup = prepare(robot, method="SEDSABSO", warn=False)
+        model = TorqueModel.of(robot)
         sl = slice(None, None, KUKA_STRIDE)
         q, qd, qdd, tau = (np.asarray(a, float)[sl] for a in (data.q, data.qd, data.qdd,
                                                                data.tau))
-        Y = np.asarray(setup.model.regressor(q, qd, qdd))
+        Y = np.asarray(model.regressor(q, qd, qdd))
         W, b = Y.reshape(-1, Y.shape[-1]), tau.reshape(-1)
-        lower, upper, _ = swarm_box(setup)
+        lower, upper, _ = BoxSearch(SEDSABSO.paper()).bounds(model)
         inst = _identification_instance(W, b, lower, upper)
         return Problem(name, "identification", W.shape[1], lower, upper, (inst,),
                        f"KUKA LWR4+ recording 1, every {KUKA_STRIDE}th sample (Eq. 17, "

@@ -7,7 +7,6 @@ built-in robots are :mod:`sedsabso_jax.robots`."""
 
 from __future__ import annotations
 
-from .. import _deprecation
 from ._base_parameters import random_states as random_states
 from ._inertia import from_pseudo_inertia as from_pseudo_inertia
 from ._inertia import params_from_com as params_from_com
@@ -28,17 +27,3 @@ __all__ = [
     "link_poses",
     "LINK_PARAMETERS", "N_LINK_PARAMETERS",
 ]
-
-#: Names that moved to the package root (0.3), kept with a warning through 0.3.x.
-__getattr__ = _deprecation.moved(__name__, {
-    "Robot": "sedsabso_jax.Robot",
-    "regressor": "sedsabso_jax.regressor",
-    "inverse_dynamics": "sedsabso_jax.inverse_dynamics",
-    "forward_kinematics": "sedsabso_jax.forward_kinematics",
-    "base_parameters": "sedsabso_jax.base_parameters",
-    "BaseParameters": "sedsabso_jax.BaseParameters",
-    "JointLimits": "sedsabso_jax.JointLimits",
-    "joint_limits_from_urdf": "sedsabso_jax.joint_limits_from_urdf",
-    "is_physically_consistent": "sedsabso_jax.is_physically_consistent",
-    "robots": "sedsabso_jax.robots",
-})

@@ -22,7 +22,7 @@ from jax.typing import DTypeLike
 from jaxtyping import Array, ArrayLike, Float
 
 from ._regressor import regressor as _full_regressor
-from ._robot import Robot
+from ._robot import LINK_PARAMETERS, N_LINK_PARAMETERS, Robot
 
 #: A unit-norm column whose distance to the span of the others is below this is dependent.
 RANK_TOLERANCE = 1e-8
@@ -81,6 +81,17 @@ class BaseParameters(eqx.Module):
         (``memory_budget``: see :func:`~sedsabso_jax.regressor`)."""
         Y = _full_regressor(self.robot, q, qd, qdd, dtype=dtype, memory_budget=memory_budget)
         return Y[..., jnp.asarray(self.indices)]
+
+    def joint_columns(self, parameter: str) -> tuple[int | None, ...]:
+        """For each joint, the base column that is its link's ``parameter`` (one of
+        :data:`~._robot.LINK_PARAMETERS`, e.g. ``"FC"`` for Coulomb friction) kept as a
+        base parameter, or None where it is not one (dropped, or regrouped onto another)."""
+        if parameter not in LINK_PARAMETERS:
+            raise ValueError(f"parameter must be one of {LINK_PARAMETERS}, got {parameter!r}")
+        offset = LINK_PARAMETERS.index(parameter)
+        return tuple(self.indices.index(k) if k in self.indices else None
+                     for k in (N_LINK_PARAMETERS * j + offset
+                               for j in range(self.robot.n_joints)))
 
     @property
     def values(self) -> Float[Array, " rank"]:

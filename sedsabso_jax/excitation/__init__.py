@@ -5,7 +5,6 @@ its parts (the paper's Eq. 5-9). Builds on :mod:`sedsabso_jax.dynamics` and
 
 from __future__ import annotations
 
-from .. import _deprecation
 from ._checks import check_trajectory as check_trajectory
 from ._checks import violations as violations
 from ._design import ExcitationDesign as ExcitationDesign
@@ -22,12 +21,3 @@ __all__ = [
     "violations", "DesignProblem", "design_fitness", "condition_number", "sampling_margin",
     "PENALTY",
 ]
-
-#: Names that moved to the package root (0.3), kept with a warning through 0.3.x.
-__getattr__ = _deprecation.moved(__name__, {
-    "FourierTrajectory": "sedsabso_jax.FourierTrajectory",
-    "design_excitation": "sedsabso_jax.design_excitation",
-    "JointLimits": "sedsabso_jax.JointLimits",
-    "joint_limits_from_urdf": "sedsabso_jax.joint_limits_from_urdf",
-    "search_box": "sedsabso_jax.excitation.coefficient_box",
-})

@@ -1,4 +1,4 @@
-"""The identification estimators, one class each (interface: :mod:`._fitting`).
+"""The identification estimators, one final class each (interface: :mod:`._fitting`).
 
 - :class:`OLS`: least squares by column-pivoted QR (:mod:`sedsabso_jax.optim._linear`);
 - :class:`WLS`: the same on rows divided by each joint's sigma, by default Gautier's
@@ -6,67 +6,61 @@
 - :class:`L1`: the exact minimiser of the summed absolute residual (the paper's Eq. 17)
   as the dual linear programme (HiGHS);
 - :class:`LevenbergMarquardt`: optimistix's Levenberg-Marquardt on the L2 problem;
-- :class:`BoxSearch`: any optimiser :func:`~sedsabso_jax.minimise` runs (the paper's
-  swarms SEDSABSO, BSO, LDWPSO, or an evosax strategy) on the weighted L1 objective, in a
-  box around the a-priori parameters;
+- :class:`~._box_search.BoxSearch`: any optimiser :func:`~sedsabso_jax.minimise` runs (the
+  paper's swarms SEDSABSO, BSO, LDWPSO, or an evosax strategy) on the weighted L1
+  objective, in a box around the a-priori parameters;
 - :class:`PhysicallyConsistent`: least squares over full link parameters a real body can
   have (:mod:`._physical`; Clarabel through cvxpy), optionally pulled toward a prior.
 
 Every one takes ``sigma`` (:func:`~._fitting.weigh`); L1 and the box searches then minimise
-the weighted L1 norm. Each is built with its options, checked there::
+the weighted L1 norm. Each is built with its options, converted and checked there::
 
     WLS("limits"), BoxSearch(SEDSABSO.paper(), runs=3), PhysicallyConsistent(OLS(),
     prior_strength=1e-4)
+
+Abstract or final: OLS and WLS are the two final forms of :class:`AbstractLeastSquares`
+(they differ in the default weighting only); L1, Levenberg-Marquardt and the box search
+those of :class:`AbstractRowFit`.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import numbers
 from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import equinox as eqx
-import jax
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
 from ..optim._baselines import least_squares
-from ..optim._box import box_around, check_bounds
-from ..optim._driver import minimise
 from ..optim._fitness import L1Residual
 from ..optim._linear import l1_solve
-from ..optim._registry import SWARMS
-from ._fitting import Estimator, EstimatorFit, FitProblem, Limits, Sigma, check_sigma, weigh
+from ._fitting import (
+    Estimator,
+    EstimatorFit,
+    FitProblem,
+    Limits,
+    check_sigma,
+    check_weighting,
+    no_physical_form,
+    weigh,
+    weighting_settings,
+)
 from ._model import TorqueModel
+from ._options import as_float, as_floats, as_int, check_count, check_number
 from ._physical import PSD_MARGIN, fit_physical
 
-
-def _count(name: str, value, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
+#: An estimator's ``sigma`` as kept: None, a weighting's name, or one number per joint.
+SigmaOption = str | tuple[float, ...] | None
 
 
-def _non_negative(name: str, value, strict: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise ValueError(f"{name} must be a number {'>' if strict else '>='} 0, got {value!r}")
-    v = float(value)
-    if not (np.isfinite(v) and (v > 0 if strict else v >= 0)):
-        raise ValueError(f"{name} must be a number {'>' if strict else '>='} 0, got {value!r}")
-    return v
-
-
-def _prior(value) -> tuple[float, ...] | None:
-    """A full a-priori parameter vector (12 per link; its length is checked against the
-    robot), kept as a tuple, or None (the robot's own parameters)."""
-    if value is None:
-        return None
-    v = np.asarray(value, dtype=float)
-    if v.ndim != 1 or not np.all(np.isfinite(v)):
+def check_prior(prior: object) -> None:
+    """That a prior (as :func:`~._options.as_floats` converted it) is None (the robot's
+    own parameters) or finite full parameters (12 per link; the count is checked against
+    the robot)."""
+    if prior is not None and not (isinstance(prior, tuple) and np.all(np.isfinite(prior))):
         raise ValueError(f"prior must be finite full parameters (12 per link), got shape "
-                         f"{v.shape}")
-    return tuple(float(x) for x in v)
+                         f"{np.shape(prior)}")  # type: ignore[call-overload]
 
 
 def prior_of(prior: Float[ArrayLike, " p"] | Sequence[float] | None, model: TorqueModel
@@ -80,47 +74,79 @@ def prior_of(prior: Float[ArrayLike, " p"] | Sequence[float] | None, model: Torq
     return p
 
 
-@dataclasses.dataclass(frozen=True)
-class OLS(Estimator):
-    """Ordinary least squares (column-pivoted QR; the minimum-norm solution when the rows
-    leave columns unidentifiable). ``sigma`` weights the rows (:func:`~._fitting.weigh`)."""
+class AbstractLeastSquares(Estimator):
+    """Least squares on the (weighted) rows by column-pivoted QR, the minimum-norm
+    solution when the rows leave columns unidentifiable: :class:`OLS` and :class:`WLS`."""
 
-    sigma: Any = None
-    registered_as: ClassVar[tuple[str, ...]] = ("OLS",)
-    name: ClassVar[str] = "OLS"
+    physical: ClassVar[bool] = False
+    costly: ClassVar[bool] = False
     normal_equations: ClassVar[bool] = True
-
-    def __post_init__(self):
-        object.__setattr__(self, "sigma", check_sigma(self.sigma))
 
     def fit(self, problem: FitProblem) -> EstimatorFit:
         rows = weigh(problem, self.sigma, default=self.default_weighting, factor=True)
         return EstimatorFit(rows.weighted_factor.solve(), None, rows.sigma, rows.factor0, rows.W,
                             rows.b, None, {})
 
+    def check(self, model: TorqueModel, limits: Limits) -> None:
+        check_weighting(self, model, limits)
 
-@dataclasses.dataclass(frozen=True)
-class WLS(OLS):
-    """Weighted least squares: :class:`OLS` on rows divided by each joint's ``sigma``;
-    ``"residual"`` (the default, also for None) is Gautier's two-step estimate."""
+    def settings(self) -> dict:
+        return weighting_settings(self)
 
-    sigma: Any = "residual"
-    registered_as: ClassVar[tuple[str, ...]] = ("WLS",)
+    def physically_consistent(self) -> PhysicallyConsistent:
+        return PhysicallyConsistent(self)
+
+    def __check_init__(self):
+        check_sigma(self.sigma)
+
+
+class AbstractRowFit(Estimator):
+    """An unconstrained fit of the weighted rows themselves, not of their normal
+    equations: :class:`L1`, :class:`LevenbergMarquardt`,
+    :class:`~._box_search.BoxSearch`. None has a physically consistent form."""
+
+    physical: ClassVar[bool] = False
+    normal_equations: ClassVar[bool] = False
+
+    def settings(self) -> dict:
+        return weighting_settings(self)
+
+    def physically_consistent(self) -> PhysicallyConsistent:
+        raise no_physical_form(self)
+
+
+class OLS(AbstractLeastSquares):
+    """Ordinary least squares; ``sigma`` weights the rows (:func:`~._fitting.weigh`;
+    None: equal weights)."""
+
+    sigma: SigmaOption = eqx.field(default=None, converter=as_floats)
+    name: ClassVar[str] = "OLS"
+    default_weighting: ClassVar[str] = "equal"
+    registered_as: ClassVar[dict[str, dict[str, Any]]] = {"OLS": {}}
+
+
+class WLS(AbstractLeastSquares):
+    """Weighted least squares: rows divided by each joint's ``sigma``; ``"residual"``
+    (the default, also for None) is Gautier's two-step estimate."""
+
+    sigma: SigmaOption = eqx.field(default="residual", converter=as_floats)
     name: ClassVar[str] = "WLS"
     default_weighting: ClassVar[str] = "residual"
+    registered_as: ClassVar[dict[str, dict[str, Any]]] = {"WLS": {}}
 
 
-@dataclasses.dataclass(frozen=True)
-class L1(Estimator):
+class L1(AbstractRowFit):
     """The exact minimiser of the (weighted) summed absolute residual, Eq. 17, as the dual
     linear programme (HiGHS); its iteration count goes to the settings."""
 
-    sigma: Any = None
-    registered_as: ClassVar[tuple[str, ...]] = ("L1",)
+    sigma: SigmaOption = eqx.field(default=None, converter=as_floats)
     name: ClassVar[str] = "L1"
+    default_weighting: ClassVar[str] = "equal"
+    costly: ClassVar[bool] = False
+    registered_as: ClassVar[dict[str, dict[str, Any]]] = {"L1": {}}
 
-    def __post_init__(self):
-        object.__setattr__(self, "sigma", check_sigma(self.sigma))
+    def __check_init__(self):
+        check_sigma(self.sigma)
 
     def fit(self, problem: FitProblem) -> EstimatorFit:
         rows = weigh(problem, self.sigma)
@@ -128,24 +154,28 @@ class L1(Estimator):
         return EstimatorFit(np.asarray(x, dtype=float), None, rows.sigma, rows.factor0, rows.W,
                             rows.b, None, {"lp_iterations": iterations})
 
+    def check(self, model: TorqueModel, limits: Limits) -> None:
+        check_weighting(self, model, limits)
 
-@dataclasses.dataclass(frozen=True)
-class LevenbergMarquardt(Estimator):
+
+class LevenbergMarquardt(AbstractRowFit):
     """optimistix's Levenberg-Marquardt on the (weighted) L2 problem, columns scaled to unit
     norm, from zero (:func:`sedsabso_jax.baselines.least_squares`)."""
 
-    sigma: Any = None
-    max_steps: int = 256
-    rtol: float = 1e-10
-    atol: float = 1e-10
-    registered_as: ClassVar[tuple[str, ...]] = ("LM",)
+    sigma: SigmaOption = eqx.field(default=None, converter=as_floats)
+    max_steps: int = eqx.field(default=256, converter=as_int)
+    rtol: float = eqx.field(default=1e-10, converter=as_float)
+    atol: float = eqx.field(default=1e-10, converter=as_float)
     name: ClassVar[str] = "LM"
+    default_weighting: ClassVar[str] = "equal"
+    costly: ClassVar[bool] = False
+    registered_as: ClassVar[dict[str, dict[str, Any]]] = {"LM": {}}
 
-    def __post_init__(self):
-        object.__setattr__(self, "sigma", check_sigma(self.sigma))
-        object.__setattr__(self, "max_steps", _count("max_steps", self.max_steps, 1))
-        object.__setattr__(self, "rtol", _non_negative("rtol", self.rtol, strict=True))
-        object.__setattr__(self, "atol", _non_negative("atol", self.atol, strict=True))
+    def __check_init__(self):
+        check_sigma(self.sigma)
+        check_count("max_steps", self.max_steps, 1)
+        check_number("rtol", self.rtol, strict=True)
+        check_number("atol", self.atol, strict=True)
 
     def fit(self, problem: FitProblem) -> EstimatorFit:
         rows = weigh(problem, self.sigma)
@@ -158,115 +188,10 @@ class LevenbergMarquardt(Estimator):
                  "run_s": float(result.run_s or 0.0)}
         return EstimatorFit(x, None, rows.sigma, rows.factor0, rows.W, rows.b, result, extra)
 
-
-def _solver_name(solver) -> str:
-    label = getattr(solver, "label", None)
-    if isinstance(label, str):
-        return label
-    if type(solver).__name__ == "Evosax":
-        return f"evosax {solver.name}"
-    return type(solver).__name__
-
-
-def _box(box):
-    """``box`` as kept: ``(fraction, floor)`` floats, or explicit ``(lower, upper)`` tuples,
-    checked (finite; lower < upper)."""
-    try:
-        a, b = box
-    except (TypeError, ValueError):
-        raise ValueError(f"box must be (fraction, floor) or (lower, upper) arrays, got "
-                         f"{box!r}") from None
-    if np.ndim(a) == 0 and np.ndim(b) == 0:
-        box_around(np.zeros(1), a, b)  # checks (fraction, floor)
-        return float(a), float(b)
-    try:
-        lower, upper = check_bounds(a, b)
-    except ValueError as err:
-        raise ValueError(f"box: {err}") from None
-    return tuple(lower.tolist()), tuple(upper.tolist())
-
-
-@dataclasses.dataclass(frozen=True)
-class BoxSearch(Estimator):
-    """A box optimiser on the (weighted) L1 objective, Eq. 17: ``solver`` is anything
-    :func:`~sedsabso_jax.minimise` runs (``SEDSABSO.paper()``, ``BSO()``, ``LDWPSO()``,
-    ``Evosax("CMA_ES")``), ``runs`` independent runs of ``iterations`` from PRNG ``seed``,
-    the best kept.
-
-    ``box``: ``(fraction, floor)`` searches ``centre +- max(fraction |centre|, floor)``
-    around the ``prior`` (full parameters, default the robot's own) projected on the base
-    parameters, the extra columns centred on 0; or explicit ``(lower, upper)`` arrays, one
-    entry per model column."""
-
-    solver: Any
-    box: Any = (0.5, 0.5)
-    runs: int = 1
-    iterations: int = 600
-    seed: int = 0
-    sigma: Any = None
-    prior: Any = None
-    registered_as: ClassVar[tuple[str, ...]] = tuple(SWARMS)
-
-    def __post_init__(self):
-        if not isinstance(self.solver, eqx.Module):  # a solver checks itself when built
-            raise ValueError(f"solver must be an optimiser instance (e.g. SEDSABSO.paper(), "
-                             f"Evosax('CMA_ES')), got {self.solver!r}")
-        object.__setattr__(self, "box", _box(self.box))
-        object.__setattr__(self, "runs", _count("runs", self.runs, 1))
-        object.__setattr__(self, "iterations", _count("iterations", self.iterations, 1))
-        object.__setattr__(self, "seed", _count("seed", self.seed, 0))
-        object.__setattr__(self, "sigma", check_sigma(self.sigma))
-        object.__setattr__(self, "prior", _prior(self.prior))
-
-    @classmethod
-    def from_name(cls, name: str, **options: Any) -> BoxSearch:
-        """The swarm ``name`` with the paper's settings (Sec. 5.2) in a box search."""
-        out = super().from_name(name, solver=SWARMS[name].paper(), **options)
-        assert isinstance(out, BoxSearch)
-        return out
-
-    @property
-    def name(self) -> str:
-        return _solver_name(self.solver)
-
-    def bounds(self, model: TorqueModel) -> tuple[np.ndarray, np.ndarray, Any]:
-        """``(lower, upper, setting)``: the box for ``model``'s columns (class docstring)."""
-        d = model.dim
-        if np.ndim(self.box[0]) == 1:
-            lower, upper = (np.asarray(v, dtype=float) for v in self.box)
-            if lower.shape != (d,):
-                raise ValueError(f"box bounds must both have shape ({d},) (one per model "
-                                 f"column), got {lower.shape} and {upper.shape}")
-            return lower, upper, "explicit"
-        centre = np.concatenate([np.asarray(model.base.project(prior_of(self.prior, model))),
-                                 np.zeros(d - model.base.rank)])
-        fraction, floor = self.box
-        lower, upper = box_around(centre, fraction, floor)
-        return lower, upper, {"fraction": fraction, "floor": floor, "centre": "prior"}
-
     def check(self, model: TorqueModel, limits: Limits) -> None:
-        super().check(model, limits)
-        self.bounds(model)
-
-    def fit(self, problem: FitProblem) -> EstimatorFit:
-        rows = weigh(problem, self.sigma)
-        lower, upper, box_setting = self.bounds(problem.model)
-        solver = self.solver
-        res = minimise(L1Residual(rows.W, rows.b), solver, lower, upper,
-                       key=jax.random.key(self.seed), iterations=self.iterations,
-                       runs=self.runs)
-        X, f = np.atleast_2d(np.asarray(res.x)), np.atleast_1d(np.asarray(res.f))
-        best = int(np.argmin(f))
-        hyper = solver.hyperparameters()
-        extra = {"box": box_setting, "runs": self.runs, "iterations": self.iterations,
-                 "seed": self.seed, "solver": hyper, "best_run": best,
-                 "f_runs": [float(v) for v in f], "compile_s": float(res.compile_s or 0.0),
-                 "run_s": float(res.run_s or 0.0)}
-        return EstimatorFit(np.asarray(X[best], dtype=float), None, rows.sigma, rows.factor0,
-                            rows.W, rows.b, res, extra)
+        check_weighting(self, model, limits)
 
 
-@dataclasses.dataclass(frozen=True)
 class PhysicallyConsistent(Estimator):
     """Least squares (``least_squares``: :class:`OLS` or :class:`WLS`, whose weighting and
     name it takes) over full link parameters a real body can have: every link's
@@ -278,43 +203,44 @@ class PhysicallyConsistent(Estimator):
     ``prior_weight`` plus ``prior_strength`` times the data term's mean curvature (the
     scale-free form; :func:`~._validation.choose_prior_strength` chooses it)."""
 
-    least_squares: Any = OLS()
-    prior: Any = None
-    prior_weight: float = 0.0
-    prior_strength: float = 0.0
+    least_squares: AbstractLeastSquares = OLS()
+    prior: tuple[float, ...] | None = eqx.field(default=None, converter=as_floats)
+    prior_weight: float = eqx.field(default=0.0, converter=as_float)
+    prior_strength: float = eqx.field(default=0.0, converter=as_float)
+    physical: ClassVar[bool] = True
+    costly: ClassVar[bool] = False
     normal_equations: ClassVar[bool] = True
 
-    def __post_init__(self):
-        if not isinstance(self.least_squares, OLS):
+    def __check_init__(self):
+        if not isinstance(self.least_squares, AbstractLeastSquares):
             raise ValueError(f"least_squares must be OLS(...) or WLS(...): a physically "
                              f"consistent fit is a least-squares fit, got {self.least_squares!r}")
-        object.__setattr__(self, "prior", _prior(self.prior))
-        for name in ("prior_weight", "prior_strength"):
-            object.__setattr__(self, name, _non_negative(name, getattr(self, name)))
+        check_prior(self.prior)
+        check_number("prior_weight", self.prior_weight)
+        check_number("prior_strength", self.prior_strength)
 
     @property
     def name(self) -> str:
         return self.least_squares.name
 
     @property
-    def sigma(self) -> Sigma:
+    def sigma(self) -> SigmaOption:
         return self.least_squares.sigma
 
     @property
-    def weights(self) -> str:
-        return self.least_squares.weights
-
-    @property
-    def physical(self) -> bool:
-        return True
+    def default_weighting(self) -> str:
+        return self.least_squares.default_weighting
 
     def settings(self) -> dict:
-        return {**super().settings(), "prior_weight": self.prior_weight,
+        return {**weighting_settings(self), "prior_weight": self.prior_weight,
                 "prior_strength": self.prior_strength, "psd_margin": PSD_MARGIN}
 
     def check(self, model: TorqueModel, limits: Limits) -> None:
-        super().check(model, limits)
+        check_weighting(self, model, limits)
         prior_of(self.prior, model)
+
+    def physically_consistent(self) -> PhysicallyConsistent:
+        return self
 
     def fit(self, problem: FitProblem) -> EstimatorFit:
         ls = self.least_squares

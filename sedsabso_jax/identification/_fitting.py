@@ -2,20 +2,19 @@
 it returns (:class:`EstimatorFit`), the one row weighting (:func:`weigh`), and the
 :class:`Estimator` interface with its registry of names.
 
-An estimator is an immutable object carrying only its own options, checked when it is
-built, with one :meth:`~Estimator.fit` method (:mod:`._estimators` has them all). A class
-that sets ``registered_as = ("NAME",)`` is known by that name to the command line's
-``--method`` and to :meth:`Estimator.named`: writing the class is all it takes to add
-one.
+An estimator is an immutable ``equinox.Module`` carrying only its own options, converted
+and checked when it is built, with one :meth:`~Estimator.fit` method (:mod:`._estimators`
+and :mod:`._box_search` have them all). A final class that sets ``registered_as =
+{"NAME": {}}`` is known by that name to the command line's ``--method`` and to
+:meth:`Estimator.named`: writing the class is all it takes to add one.
 """
-
-from __future__ import annotations
-
+# no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 import abc
 import dataclasses
 from collections.abc import Callable, Sequence
 from typing import Any, ClassVar, TypeAlias
 
+import equinox as eqx
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
@@ -25,7 +24,7 @@ from ._model import TorqueModel
 
 #: How rows are weighted: each joint's rows divided by its standard deviation sigma.
 WEIGHTINGS = ("equal", "residual", "limits", "given")
-_NAMED: dict[str, type[Estimator]] = {}
+_NAMED: dict[str, tuple[type["Estimator"], dict[str, Any]]] = {}
 #: A row weighting (:func:`weigh`): None, ``"residual"``, ``"limits"`` or one positive
 #: number per joint.
 Sigma: TypeAlias = str | Sequence[float] | Float[ArrayLike, " n"] | None
@@ -48,21 +47,17 @@ def per_joint(name: str, value: Sigma, n: int, allow_none: bool = True
     return v
 
 
-def check_sigma(sigma: Sigma) -> str | tuple[float, ...] | None:
-    """``sigma`` as an estimator keeps it: None (the estimator's default weighting),
-    ``"equal"``, ``"residual"``, ``"limits"`` or a tuple of positive finite numbers (one
-    per joint; their count is checked against the data)."""
+def check_sigma(sigma: object) -> None:
+    """That ``sigma`` (numbers converted to a tuple of floats,
+    :func:`~._options.as_floats`) is None (the estimator's default
+    weighting), ``"equal"``, ``"residual"``, ``"limits"`` or positive finite numbers (one
+    per joint; their count is checked against the model)."""
     if sigma is None or (isinstance(sigma, str) and sigma in ("equal", "residual", "limits")):
-        return sigma
-    expected = ("sigma must be None, 'equal', 'residual', 'limits' or positive finite numbers "
-                "(one per ")
-    try:
-        v = None if isinstance(sigma, str) else np.asarray(sigma, dtype=float)
-    except (TypeError, ValueError):
-        v = None
-    if v is None or v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)) or np.any(v <= 0):
-        raise ValueError(f"{expected}joint), got {sigma!r}")
-    return tuple(float(x) for x in v)
+        return
+    if not (isinstance(sigma, tuple) and sigma and all(np.isfinite(sigma))
+            and min(sigma) > 0):
+        raise ValueError(f"sigma must be None, 'equal', 'residual', 'limits' or positive "
+                         f"finite numbers (one per joint), got {sigma!r}")
 
 
 def weighting(sigma: Sigma, default: str = "equal") -> str:
@@ -194,68 +189,80 @@ def weigh(problem: FitProblem, sigma: Sigma, *, default: str = "equal",
     return WeightedRows(np.asarray(s), W, b, factor0, factorize(W, b) if factor else None)
 
 
-class Estimator(abc.ABC):
-    """An identification estimator: immutable, its options checked when it is built (a
-    bad one is a ``ValueError`` naming it), and :meth:`fit` to fit a :class:`FitProblem`.
+class Estimator(eqx.Module):
+    """An identification estimator: an immutable ``equinox.Module`` whose fields are its
+    options (converted and checked when it is built: a bad one is a ``ValueError`` naming
+    it), with :meth:`fit` to fit a :class:`FitProblem`; abstract or final, as equinox's
+    modules are.
 
-    Subclasses are frozen dataclasses with a ``sigma`` option (the row weighting,
-    :func:`weigh`), a :attr:`name` (what reports call the method) and, to be known by
-    name to ``--method`` and :meth:`named`, ``registered_as = ("NAME", ...)``."""
+    What the orchestration needs to know it asks the estimator: :attr:`name`,
+    :attr:`sigma` and :attr:`weights` (the row weighting, :func:`weigh`),
+    :attr:`physical`, :attr:`costly`, :attr:`normal_equations`, :attr:`needs_limits`,
+    :meth:`physically_consistent`, :meth:`check`, :meth:`settings`. A final class with
+    ``registered_as = {"NAME": {fixed options}}`` is known by that name to the command
+    line's ``--method`` and to :meth:`named`: writing the class is all it takes."""
 
-    #: The names this class is known by (:meth:`named`, the command's ``--method``).
-    registered_as: ClassVar[tuple[str, ...]] = ()
-    #: What ``sigma=None`` means for this estimator (see :func:`weigh`).
-    default_weighting: ClassVar[str] = "equal"
+    #: Whether the fit is physically consistent (full link parameters).
+    physical: eqx.AbstractClassVar[bool]
+    #: Whether every fit is costly (a box search): the command then searches no weighting.
+    costly: eqx.AbstractClassVar[bool]
     #: Whether :meth:`fit` reads the rows only through each joint's normal equations
     #: (least squares with one weight per joint): validations then fit compressed rows
     #: (:mod:`._compressed`).
-    normal_equations: ClassVar[bool] = False
+    normal_equations: eqx.AbstractClassVar[bool]
+    #: Name -> the options it fixes, for :meth:`named` and ``--method``.
+    registered_as: ClassVar[dict[str, dict[str, Any]]] = {}
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
-        for name in cls.__dict__.get("registered_as", ()):
-            _NAMED[name] = cls
+        for name, fixed in cls.__dict__.get("registered_as", {}).items():
+            _NAMED[name] = (cls, fixed)
+
+    @property
+    @abc.abstractmethod
+    def sigma(self) -> str | tuple[float, ...] | None:
+        """The row weighting (see :func:`check_sigma`)."""
 
     @property
     @abc.abstractmethod
     def name(self) -> str:
         """What reports call the method: ``"OLS"``, ``"WLS"``, ``"L1"``, ``"LM"``, a
-        solver's name."""
+        solver's label."""
+
+    @property
+    @abc.abstractmethod
+    def default_weighting(self) -> str:
+        """What ``sigma=None`` means for this estimator (one of :data:`WEIGHTINGS`)."""
 
     @abc.abstractmethod
     def fit(self, problem: FitProblem) -> EstimatorFit:
         """Fit the rows of ``problem``."""
 
-    @property
-    def physical(self) -> bool:
-        """Whether the fit is physically consistent (full link parameters)."""
-        return False
+    @abc.abstractmethod
+    def check(self, model: TorqueModel, limits: Limits) -> None:
+        """What can be checked before any data: the options against ``model`` and the
+        torque ``limits`` (None if unknown)."""
+
+    @abc.abstractmethod
+    def settings(self) -> dict:
+        """The settings the JSON report writes for this estimator (``method``,
+        ``physical``, ``weights`` and the estimator's own)."""
+
+    @abc.abstractmethod
+    def physically_consistent(self) -> "Estimator":
+        """This fit over parameters a real body can have: a least-squares fit's
+        :class:`~._estimators.PhysicallyConsistent` form (itself if it is one); a
+        ValueError naming the estimator for the others."""
 
     @property
     def weights(self) -> str:
         """The kind of row weighting (one of :data:`WEIGHTINGS`)."""
-        return weighting(getattr(self, "sigma", None), self.default_weighting)
+        return weighting(self.sigma, self.default_weighting)
 
-    def settings(self) -> dict:
-        """The settings the JSON report writes for this estimator (``method``,
-        ``physical``, ``weights`` and the estimator's own)."""
-        return {"method": self.name, "physical": self.physical, "weights": self.weights}
-
-    def check(self, model: TorqueModel, limits: Limits) -> None:
-        """What can be checked before any data: the options against ``model`` and the
-        torque ``limits`` (None if unknown)."""
-        sigma = getattr(self, "sigma", None)
-        if sigma == "limits" and limits is None:
-            raise ValueError("sigma='limits' needs limits=(one torque limit per joint)")
-        if self.weights == "given":
-            per_joint("sigma", sigma, model.robot.n_joints, allow_none=False)
-
-    @classmethod
-    def from_name(cls, name: str, **options: Any) -> Estimator:
-        """The estimator this class registers as ``name``, built with those ``options``
-        it has (the command passes every swarm option to every estimator)."""
-        fields = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
-        return cls(**{k: v for k, v in options.items() if k in fields})
+    @property
+    def needs_limits(self) -> bool:
+        """Whether the fit needs the torque limits (it weights rows by them)."""
+        return self.weights == "limits"
 
     @staticmethod
     def registered() -> tuple[str, ...]:
@@ -263,12 +270,37 @@ class Estimator(abc.ABC):
         return tuple(_NAMED)
 
     @staticmethod
-    def named(name: str, **options: Any) -> Estimator:
+    def named(name: str, **options: Any) -> "Estimator":
         """The estimator registered as ``name`` (e.g. ``"WLS"``, ``"SEDSABSO"``), built
-        with ``options`` (``sigma``, ``runs``, ...; those it does not have are ignored)."""
+        with ``options`` (``sigma``, ``runs``, ...; those it does not have are ignored:
+        the command passes every swarm option to every estimator)."""
         if name not in _NAMED:
             raise ValueError(f"unknown estimator {name!r}; expected one of {tuple(_NAMED)}")
-        return _NAMED[name].from_name(name, **options)  # type: ignore[attr-defined]
+        cls, fixed = _NAMED[name]
+        fields = {f.name for f in dataclasses.fields(cls)}
+        return cls(**{k: v for k, v in options.items() if k in fields and k not in fixed},
+                   **fixed)
+
+
+def check_weighting(estimator: Estimator, model: TorqueModel, limits: Limits) -> None:
+    """The checks of ``estimator``'s weighting before any data: ``"limits"`` needs them,
+    given numbers one per joint."""
+    if estimator.needs_limits and limits is None:
+        raise ValueError("sigma='limits' needs limits=(one torque limit per joint)")
+    if estimator.weights == "given":
+        per_joint("sigma", estimator.sigma, model.robot.n_joints, allow_none=False)
+
+
+def weighting_settings(estimator: Estimator) -> dict:
+    """The settings every estimator reports: ``method``, ``physical``, ``weights``."""
+    return {"method": estimator.name, "physical": estimator.physical,
+            "weights": estimator.weights}
+
+
+def no_physical_form(estimator: Estimator) -> ValueError:
+    """The error of an estimator that has no physically consistent form."""
+    return ValueError(f"a physically consistent fit is a least-squares fit: use method 'OLS' "
+                      f"or 'WLS', not {estimator.name!r}")
 
 
 def describe(estimator: Estimator, model: TorqueModel, limits: Limits) -> dict:

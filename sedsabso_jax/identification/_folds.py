@@ -193,8 +193,7 @@ def cross_validation_of(estimator: Estimator, rows: SplitRows, validation: dict,
             scores.append(score_of(validation_metrics(measured[-1], predicted[-1], limits)))
             if on_fit is not None:
                 on_fit()
-    settings = {**describe(estimator, rows.model, limits),
-                "sigma": getattr(estimator, "sigma", None)}
+    settings = {**describe(estimator, rows.model, limits), "sigma": estimator.sigma}
     return CrossValidation(
         metrics=validation_metrics(np.concatenate(measured), np.concatenate(predicted), limits),
         fold_scores=np.asarray(scores), period_s=splits.period_s, folds=splits.labels,

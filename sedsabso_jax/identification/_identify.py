@@ -1,18 +1,14 @@
 """Identify a robot's base parameters (plus friction and actuator terms) from joint data::
 
-    fit = identify(robot, data, WLS("limits"), "viscous-coulomb+offset", limits=...)
+    model = TorqueModel.of(robot, (Offset(),))
+    fit = identify(robot, data, WLS("limits"), model, limits=...)
 
 ``data`` is a :class:`~sedsabso_jax.Measurements` or the arrays ``(q, qd, qdd, tau)``
 (each ``(samples, n)``, joint side); loading and filtering is
 :mod:`sedsabso_jax.measurements`' job. The estimator is one of :mod:`._estimators` (OLS,
 WLS, L1, Levenberg-Marquardt, a box search with any optimiser, physically consistent);
-the torque model a :class:`~._model.TorqueModel` or its friction terms as a string.
-
-0.2's call form ``identify(robot, q, qd, qdd, tau, method=..., friction=..., sigma=...,
-physical=..., ...)`` keeps working through 0.3.x with a ``DeprecationWarning``
-(:mod:`._legacy`).
+the torque model a :class:`~._model.TorqueModel`, built once.
 """
-
 from __future__ import annotations
 
 import dataclasses
@@ -25,26 +21,17 @@ from typing import Any, TypeAlias
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
-from .. import _deprecation
+from .._deprecation import caller_stacklevel
 from .._output import jsonable
 from .._version import __version__
-from ..dynamics._base_parameters import BaseParameters
 from ..dynamics._robot import Robot
 from ..dynamics._urdf_writer import to_urdf, update_urdf
 from ..measurements._container import Measurements
-from ..measurements._transmission import TransmissionLike
 from ..optim._linear import factorize
 from ._estimators import OLS
 from ._fitting import Estimator, FitProblem, Limits, describe, per_joint
-from ._legacy import METHODS as METHODS
-from ._legacy import RegressorFit as RegressorFit
-from ._legacy import Setup as Setup
-from ._legacy import fit_regressor as fit_regressor
-from ._legacy import from_keywords, regrouped_message
-from ._legacy import prepare as prepare
-from ._legacy import swarm_box as swarm_box
 from ._metrics import nrms_over_limits
-from ._model import SMOOTH_VELOCITY, TorqueModel
+from ._model import TorqueModel, regrouped_message
 from ._uncertainty import parameter_std, relative_std_percent
 
 #: Joint data: a :class:`~sedsabso_jax.Measurements`, several of them (recordings fitted
@@ -245,38 +232,45 @@ def joined(recordings: Sequence[Measurements]) -> Measurements:
                                               **d.info} for d in recordings]})
 
 
-def torque_model(robot: Robot, model: TorqueModel | str | None, *,
-                 transmission: TransmissionLike = None, base: BaseParameters | None = None,
-                 smooth_velocity: float = SMOOTH_VELOCITY, recordings: int = 1) -> TorqueModel:
-    """``model`` (a :class:`~._model.TorqueModel` of ``robot``, or friction terms as a
-    string, None for ``"viscous-coulomb"``) as a TorqueModel; ``transmission``, ``base``,
-    ``smooth_velocity`` and ``recordings`` (one offset per recording, the offset term
-    added) build a string's model (a TorqueModel has its own)."""
+def model_of(robot: Robot, model: TorqueModel | None) -> TorqueModel:
+    """``model``, checked to be a :class:`~._model.TorqueModel` of ``robot``; None: the
+    robot's rigid-body model with viscous and Coulomb friction."""
     if not isinstance(robot, Robot):
         raise TypeError(f"robot must be a sedsabso_jax.Robot, got {type(robot).__name__}")
-    if isinstance(model, TorqueModel):
-        if model.robot.n_params != robot.n_params or model.robot.n_joints != robot.n_joints:
-            raise ValueError(f"model is a TorqueModel of robot {model.robot.name!r} with "
-                             f"{model.robot.n_joints} joints, not of {robot.name!r}")
-        given = [k for k, v in (("transmission", transmission), ("base", base)) if v is not None]
-        if smooth_velocity != SMOOTH_VELOCITY:
-            given.append("smooth_velocity")
-        if given:
-            raise ValueError(f"{', '.join(given)}: part of the TorqueModel given as model; "
-                             f"build it with TorqueModel.of(robot, ..., {given[0]}=...)")
-        return model
-    friction = "viscous-coulomb" if model is None else model
-    if recordings > 1 and isinstance(friction, str) and "offset" not in friction:
-        friction += "+offset"
-    return TorqueModel.of(robot, friction, transmission=transmission,
-                          smooth_velocity=smooth_velocity, base=base, recordings=recordings)
+    if model is None:
+        return TorqueModel.of(robot)
+    if not isinstance(model, TorqueModel):
+        raise TypeError(f"model must be a TorqueModel (TorqueModel.of(robot, terms); "
+                        f"parse_friction reads the command line's 'a+b' text), got {model!r}")
+    if model.robot.n_params != robot.n_params or model.robot.n_joints != robot.n_joints:
+        raise ValueError(f"model is a TorqueModel of robot {model.robot.name!r} with "
+                         f"{model.robot.n_joints} joints, not of {robot.name!r}")
+    return model
+
+
+def checked(estimator: Estimator) -> Estimator:
+    """``estimator``, checked to be one."""
+    if not isinstance(estimator, Estimator):
+        raise TypeError(f"estimator must be an Estimator (OLS(), WLS(...), L1(), "
+                        f"BoxSearch(...), ...), got {estimator!r}")
+    return estimator
+
+
+def one_or_more(value: Any, kind: type) -> tuple[Any, ...]:
+    """``value`` as a tuple: one ``kind`` as a tuple of it, a sequence of them as a
+    tuple."""
+    return (value,) if isinstance(value, kind) else tuple(value)
+
+
+def check_offsets(model: TorqueModel, count: int) -> None:
+    """That a model with one torque offset per recording has ``count`` of them."""
+    if model.recordings > 1 and model.recordings != count:
+        raise ValueError(f"the torque model has one offset per recording for "
+                         f"{model.recordings} recordings; the data hold {count}")
 
 
 def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
-             model: TorqueModel | str | None = None, *old_args: Any, limits: Limits = None,
-             transmission: TransmissionLike = None, base: BaseParameters | None = None,
-             smooth_velocity: float = SMOOTH_VELOCITY, offset_per_recording: bool = False,
-             **old_keywords: Any) -> Identification:
+             model: TorqueModel | None = None, *, limits: Limits = None) -> Identification:
     """Identify the base parameters (plus extra friction terms) of ``robot`` from
     ``data``.
 
@@ -287,65 +281,27 @@ def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
         estimator: one of :mod:`._estimators`: ``OLS()`` (default), ``WLS(sigma)``,
             ``L1()``, ``LevenbergMarquardt()``, ``BoxSearch(solver, ...)``,
             ``PhysicallyConsistent(OLS() or WLS(...), prior_strength=...)``.
-        model: a :class:`~._model.TorqueModel` (:meth:`~._model.TorqueModel.of`) or its
-            friction terms: ``"viscous-coulomb"`` (None) plus optional ``"+offset"``,
-            ``"+quadratic"``, ``"+smooth"``, ``"+armature"``, ``"+coupling"``.
+        model: a :class:`~._model.TorqueModel` of ``robot``
+            (:meth:`~._model.TorqueModel.of`: its terms, transmission, precomputed base
+            parameters, one offset per recording); None: viscous and Coulomb friction
+            only. A model with one torque offset per recording
+            (``TorqueModel.of(..., recordings=R)``) needs ``R`` recordings; new motions
+            are predicted with the offsets' mean.
         limits: per-joint torque limits (N m): the fit reports its NRMS over them; needed
             by ``sigma="limits"``.
-        transmission: builds a friction string's model, with ``base`` and
-            ``smooth_velocity`` (:meth:`~._model.TorqueModel.of`).
-        base: see ``transmission``.
-        smooth_velocity: see ``transmission``.
-        offset_per_recording: with several recordings and a friction string, one torque
-            offset per joint and recording (``OFFj.r``; the ``offset`` term is added): a
-            sensor zero that moved between them. New motions are predicted with their
-            mean. A TorqueModel carries its own (``TorqueModel.of(..., recordings=R)``).
-
-    0.2's form ``identify(robot, q, qd, qdd, tau, method=..., friction=..., sigma=...,
-    physical=..., prior=..., prior_weight=..., prior_strength=..., box=..., runs=...,
-    iterations=..., seed=..., solver=...)`` works through 0.3.x with a
-    ``DeprecationWarning``.
 
     Warns (``UserWarning``) with the condition number and the names of the columns
     concerned when the stacked regressor is rank deficient or poorly conditioned, and
     names the extra columns the base regressor already spans (left out).
     """
-    if old_args or old_keywords:
-        if old_args:  # identify(robot, q, qd, qdd, tau, ...)
-            if len(old_args) != 1:
-                raise TypeError(f"identify() takes (robot, data, estimator, model), or 0.2's "
-                                f"(robot, q, qd, qdd, tau); got {4 + len(old_args)} "
-                                f"positional arguments")
-            data = (data, estimator, model, old_args[0])  # type: ignore[assignment]
-        elif not isinstance(estimator, Estimator) or model is not None:
-            raise TypeError("0.2's keyword settings (method=..., friction=..., ...) go with "
-                            "identify(robot, q, qd, qdd, tau, ...), not with an estimator")
-        _deprecation.warn("identify(robot, q, qd, qdd, tau, method=..., friction=..., ...)",
-                          "identify(robot, (q, qd, qdd, tau), estimator, model), e.g. "
-                          "identify(robot, data, WLS('limits'), 'viscous-coulomb+offset')")
-        if not isinstance(robot, Robot):
-            raise TypeError(f"robot must be a sedsabso_jax.Robot, got {type(robot).__name__}")
-        estimator, model = from_keywords(robot, old_keywords, transmission=transmission,
-                                         base=base, smooth_velocity=smooth_velocity)
-        transmission = base = None
-        smooth_velocity = SMOOTH_VELOCITY
-    if not isinstance(estimator, Estimator):
-        raise TypeError(f"estimator must be an Estimator (OLS(), WLS(...), L1(), "
-                        f"BoxSearch(...), ...), got {estimator!r}")
+    checked(estimator)
+    model = model_of(robot, model)
     several = is_several(data)
-    count = len(data) if several else 1  # type: ignore[arg-type]
-    if offset_per_recording and count < 2:
-        raise ValueError("offset_per_recording needs several recordings")
-    model = torque_model(robot, model, transmission=transmission, base=base,
-                         smooth_velocity=smooth_velocity,
-                         recordings=count if offset_per_recording else 1)
-    if model.recordings > 1 and model.recordings != count:
-        raise ValueError(f"the torque model has one offset per recording for "
-                         f"{model.recordings} recordings; the data hold {count}")
+    check_offsets(model, len(data) if several else 1)  # type: ignore[arg-type]
     limits = per_joint("limits", limits, robot.n_joints)
     estimator.check(model, limits)
     if model.regrouped:
-        warnings.warn(regrouped_message(model), stacklevel=_deprecation.caller_stacklevel())
+        warnings.warn(regrouped_message(model), stacklevel=caller_stacklevel())
     index = None
     if several:
         q, qd, qdd, tau, index = stacked(recordings_of(robot, data))

@@ -49,6 +49,13 @@ class Validation(abc.ABC):
 
     #: What the reports call it.
     kind: ClassVar[str]
+    #: The fewest recordings it can split.
+    min_recordings: ClassVar[int] = 1
+
+    def of(self, recordings: Sequence[Measurements]) -> Validation:
+        """The validation to split ``recordings`` by: itself (a recipe such as
+        :class:`~._auto.DefaultValidation` makes one for the recordings)."""
+        return self
 
     @abc.abstractmethod
     def splits(self, recordings: Sequence[Measurements]) -> Splits:
@@ -179,9 +186,10 @@ class RecordingFolds(Validation):
     """Leave one recording out: each recording is predicted by a fit to the others."""
 
     kind: ClassVar[str] = "recording folds"
+    min_recordings: ClassVar[int] = 2
 
     def splits(self, recordings: Sequence[Measurements]) -> Splits:
-        if len(recordings) < 2:
+        if len(recordings) < self.min_recordings:
             raise ValueError("RecordingFolds (leave one recording out) needs at least 2 "
                              "recordings")
         labels = np.concatenate([np.full(r.n_samples, k) for k, r in enumerate(recordings)])
@@ -219,6 +227,10 @@ class Pooled(Validation):
                       period_s=periods.pop() if len(periods) == 1 else None,
                       parts=tuple(v.kind for v, p in zip(self.validations, parts)
                                   for _ in range(len(p))))
+
+    @property
+    def min_recordings(self) -> int:  # type: ignore[override]
+        return max(v.min_recordings for v in self.validations)
 
     def describe(self) -> str:
         return "; and ".join(v.describe() for v in self.validations)

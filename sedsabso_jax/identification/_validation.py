@@ -33,9 +33,8 @@ estimator. Nothing here looks at held-out files: they are for judging the choice
 for making it.
 
 Each takes the data as a :class:`~sedsabso_jax.Measurements`, several of them, or
-``(times, q, qd, qdd, tau)``, estimator objects (:mod:`._estimators`) and torque models (a
-:class:`~._model.TorqueModel` or friction terms). 0.2's forms ``(robot, times, q, qd, qdd,
-tau, **identify_settings)`` keep working through 0.3.x with a ``DeprecationWarning``.
+``(times, q, qd, qdd, tau)``, estimator objects (:mod:`._estimators`), built torque models
+(:class:`~._model.TorqueModel`) and a validation object (default ``PhaseFolds()``).
 """
 
 
@@ -43,18 +42,14 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Iterable
-from typing import Any
+from typing import cast
 
 import numpy as np
-from jaxtyping import ArrayLike, Int
 
-from .. import _deprecation
-from ..dynamics._base_parameters import BaseParameters, base_parameters
 from ..dynamics._robot import Robot
 from ..measurements._container import Measurements
-from ..measurements._transmission import TransmissionLike, coupled_motors
 from ._estimators import OLS, WLS, PhysicallyConsistent
-from ._fitting import Estimator, Limits, ProgressCallback, Sigma, per_joint
+from ._fitting import Estimator, Limits, ProgressCallback, per_joint
 from ._folds import DEFAULT_FOLDS as DEFAULT_FOLDS
 from ._folds import REPEAT_CORRELATION as REPEAT_CORRELATION
 from ._folds import TIE_FRACTION as TIE_FRACTION
@@ -62,35 +57,23 @@ from ._folds import CrossValidation as CrossValidation
 from ._folds import SplitRows, cross_validation_of, not_worse
 from ._folds import phase_folds as phase_folds
 from ._folds import repeat_period as repeat_period
-from ._identify import Data, recordings_of, stacked, torque_model
-from ._legacy import estimator_from, from_keywords
-from ._model import SMOOTH_VELOCITY, TorqueModel
-from ._splits import GivenFolds, PhaseFolds, Splits, Validation
+from ._identify import (
+    Data,
+    check_offsets,
+    checked,
+    model_of,
+    one_or_more,
+    recordings_of,
+    stacked,
+)
+from ._model import TorqueModel, candidate_models
+from ._splits import PhaseFolds, Splits, Validation
 
-#: The candidate torque models of :func:`select_model`, simplest first.
-FRICTION_CANDIDATES = ("viscous-coulomb", "viscous-coulomb+offset",
-                       "viscous-coulomb+offset+armature",
-                       "viscous-coulomb+offset+quadratic+smooth")
 #: The candidate estimators of :func:`select_model` (their weightings), simplest first.
 ESTIMATOR_CANDIDATES = (OLS(), WLS("residual"), WLS("limits"))
-#: 0.2's form of :data:`ESTIMATOR_CANDIDATES`: (method, sigma) pairs.
-WEIGHTING_CANDIDATES = tuple((e.name, e.sigma) for e in ESTIMATOR_CANDIDATES)
 #: The candidate pulls of a physically consistent fit toward the a-priori parameters
 #: (:func:`choose_prior_strength`; multiples of the data term's mean curvature), none first.
 PRIOR_STRENGTHS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)
-
-
-def _old_form(what: str, data, positional: tuple, count: int):
-    """0.2's ``what(robot, times, q, qd, qdd, tau, **settings)``: the data tuple, with a
-    warning."""
-    if positional:
-        if len(positional) != count:
-            raise TypeError(f"{what}() takes (robot, data, ...), or 0.2's (robot, times, q, "
-                            f"qd, qdd, tau, ...)")
-        data = (data, *positional)
-    _deprecation.warn(f"{what}(robot, times, q, qd, qdd, tau, method=..., friction=..., ...)",
-                      f"{what}(robot, data, ...) with estimator objects and torque models")
-    return data
 
 
 class _Fits:
@@ -112,25 +95,6 @@ class _Fits:
         return fitted
 
 
-def validation_of(validation: Validation | None, folds: int | Int[ArrayLike, " T"] | None
-                  ) -> Validation:
-    """The :class:`~._splits.Validation` of the arguments ``validation`` and ``folds`` (a
-    count of phase folds, or fold labels), which are alternatives."""
-    if validation is not None:
-        if folds is not None:
-            raise ValueError("give folds or validation, not both (folds=K is "
-                             "validation=PhaseFolds(K))")
-        if not isinstance(validation, Validation):
-            raise TypeError(f"validation must be a Validation (PhaseFolds(), SpeedSplits(), "
-                            f"RecordingFolds(), GivenFolds(labels)), got {validation!r}")
-        return validation
-    if folds is None:
-        return PhaseFolds()
-    if np.ndim(folds) == 1:
-        return GivenFolds(folds)  # type: ignore[arg-type]
-    return PhaseFolds(folds)  # type: ignore[arg-type]
-
-
 @dataclasses.dataclass(frozen=True, eq=False)
 class Prepared:
     """The recordings of ``data``, checked and stacked, and a validation's splits."""
@@ -142,10 +106,15 @@ class Prepared:
 
     @classmethod
     def of(cls, robot: Robot, data: Data, validation: Validation) -> Prepared:
+        if not isinstance(validation, Validation):
+            raise TypeError(f"validation must be a Validation (PhaseFolds(), SpeedSplits(), "
+                            f"RecordingFolds(), GivenFolds(labels), Pooled(...)), got "
+                            f"{validation!r}")
         recordings = recordings_of(robot, data)
         return cls(recordings, stacked(recordings), validation.splits(recordings), validation)
 
     def rows(self, model: TorqueModel, limits: np.ndarray | None) -> SplitRows:
+        check_offsets(model, len(self.recordings))
         q, qd, qdd, tau, index = self.arrays
         Y = model.regressor(q, qd, qdd, index if model.recordings > 1 else None)
         return SplitRows(model, Y, tau, limits, self.splits)
@@ -158,49 +127,22 @@ class Prepared:
 
 
 def cross_validate(robot: Robot, data: Data, estimator: Estimator = OLS(),
-                   model: TorqueModel | str | None = None, *old_args: Any,
-                   folds: int | Int[ArrayLike, " T"] | None = None,
-                   validation: Validation | None = None, limits: Limits = None,
-                   transmission: TransmissionLike = None, base: BaseParameters | None = None,
-                   smooth_velocity: float = SMOOTH_VELOCITY, offset_per_recording: bool = False,
-                   progress: ProgressCallback | None = None, **old_keywords: Any
-                   ) -> CrossValidation:
+                   model: TorqueModel | None = None, *,
+                   validation: Validation = PhaseFolds(), limits: Limits = None,
+                   progress: ProgressCallback | None = None) -> CrossValidation:
     """Validate :func:`~._identify.identify` ``(robot, data, estimator, model)``: fit each
-    split of ``validation`` (a :class:`~._splits.Validation`; default ``folds`` phase
-    folds, :data:`DEFAULT_FOLDS`, or ``folds`` given as labels, one integer per sample)
-    and predict it. ``data``: one recording or several (stacked); ``limits``,
-    ``transmission``, ``base``, ``smooth_velocity`` and ``offset_per_recording`` as in
-    :func:`~._identify.identify`; ``progress(label, done, total)`` is called after each
-    split's fit (``total``: the splits)."""
-    if old_args or old_keywords:
-        data = _old_form("cross_validate", data, (estimator, model, *old_args), 4)
-        estimator, model = from_keywords(robot, old_keywords, transmission=transmission,
-                                         base=base, smooth_velocity=smooth_velocity)
-        transmission, base, smooth_velocity = None, None, SMOOTH_VELOCITY
-    prepared = Prepared.of(robot, data, validation_of(validation, folds))
-    model = torque_model(robot, model, transmission=transmission, base=base,
-                         smooth_velocity=smooth_velocity,
-                         recordings=_offsets(offset_per_recording, prepared))
+    split of ``validation`` (a :class:`~._splits.Validation`; default
+    :data:`DEFAULT_FOLDS` phase folds) and predict it. ``data``: one recording or several
+    (stacked); ``model`` and ``limits`` as in :func:`~._identify.identify`;
+    ``progress(label, done, total)`` is called after each split's fit (``total``: the
+    splits)."""
+    prepared = Prepared.of(robot, data, validation)
+    model = model_of(robot, model)
     limits = per_joint("limits", limits, robot.n_joints)
-    _check_estimator(estimator).check(model, limits)
+    checked(estimator).check(model, limits)
     fits = _Fits(progress, len(prepared.splits))
     return prepared.validate(estimator, prepared.rows(model, limits),
                              fits.after(f"{estimator.name}, {model.friction}"))
-
-
-def _offsets(offset_per_recording: bool, prepared: Prepared) -> int:
-    """The ``recordings`` of the torque models: one offset per recording, if asked."""
-    count = len(prepared.recordings)
-    if offset_per_recording and count < 2:
-        raise ValueError("offset_per_recording needs several recordings")
-    return count if offset_per_recording else 1
-
-
-def _check_estimator(estimator):
-    if not isinstance(estimator, Estimator):
-        raise TypeError(f"estimator must be an Estimator (OLS(), WLS(...), L1(), "
-                        f"BoxSearch(...), ...), got {estimator!r}")
-    return estimator
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -260,70 +202,39 @@ class Selection:
                 "candidates": [{"settings": s, **cv.as_dict()} for s, cv in self.candidates]}
 
 
-def select_model(robot: Robot, data: Data, *old_args: Any,
+def select_model(robot: Robot, data: Data, *,
+                 models: TorqueModel | Iterable[TorqueModel] | None = None,
                  estimators: Estimator | Iterable[Estimator] | None = None,
-                 frictions: str | TorqueModel | Iterable[str | TorqueModel] | None = None,
-                 folds: int | Int[ArrayLike, " T"] | None = None,
-                 validation: Validation | None = None, limits: Limits = None,
-                 transmission: TransmissionLike = None, base: BaseParameters | None = None,
-                 smooth_velocity: float = SMOOTH_VELOCITY, offset_per_recording: bool = False,
-                 progress: ProgressCallback | None = None,
-                 weightings: Iterable[tuple[str, Sigma]] | None = None,
-                 **old_keywords: Any) -> Selection:
+                 validation: Validation = PhaseFolds(), limits: Limits = None,
+                 progress: ProgressCallback | None = None) -> Selection:
     """Choose the torque model and the estimator by validation (module docstring).
 
-    ``estimators`` (default :data:`ESTIMATOR_CANDIDATES`; those weighting by the torque
-    limits are skipped without ``limits``; physically consistent ones count as simpler
-    than the same unconstrained) and ``frictions`` (default :data:`FRICTION_CANDIDATES`:
-    friction strings, or TorqueModels) are the grid, simplest first; a ``transmission``
-    with a coupled motor adds the ``coupling`` term to every friction string. Every
-    candidate is scored by ``validation`` (default: ``folds`` phase folds, as in
-    :func:`cross_validate`; a :class:`~._splits.Pooled` validation's parts are scored
-    from the same fits: :attr:`~._folds.CrossValidation.part_scores`).
-    ``progress(label, done, total)`` is called after each fit (``total``: candidates x
-    splits).
-    0.2's ``weightings`` ((method, sigma) pairs) and keyword settings (``physical``, ...)
-    keep working, deprecated."""
-    if old_args or old_keywords or weightings is not None:
-        if old_args or old_keywords:
-            data = _old_form("select_model", data, old_args, 4)
-        else:
-            _deprecation.warn("select_model(weightings=...)", "estimators=(OLS(), ...)")
-        estimators = tuple(estimator_from(robot, method=m, sigma=s, **old_keywords)
-                           for m, s in (weightings or WEIGHTING_CANDIDATES))
-    estimators = ESTIMATOR_CANDIDATES if estimators is None else (
-        (estimators,) if isinstance(estimators, Estimator) else tuple(estimators))
-    frictions = FRICTION_CANDIDATES if frictions is None else (
-        (frictions,) if isinstance(frictions, (str, TorqueModel)) else tuple(frictions))
+    ``models`` (default :func:`~._model.candidate_models` of the robot: its
+    :data:`~._model.FRICTION_CANDIDATES`) and ``estimators`` (default
+    :data:`ESTIMATOR_CANDIDATES`; those weighting by the torque limits are skipped
+    without ``limits``; physically consistent ones count as simpler than the same
+    unconstrained) are the grid, simplest first. Every candidate is scored by
+    ``validation`` (default phase folds, as in :func:`cross_validate`; a
+    :class:`~._splits.Pooled` validation's parts are scored from the same fits:
+    :attr:`~._folds.CrossValidation.part_scores`). ``progress(label, done, total)`` is
+    called after each fit (``total``: candidates x splits)."""
+    estimators = ESTIMATOR_CANDIDATES if estimators is None else one_or_more(estimators,
+                                                                             Estimator)
     limits = per_joint("limits", limits, robot.n_joints)
     if limits is None:
-        estimators = tuple(e for e in estimators if getattr(e, "sigma", None) != "limits")
-    if not frictions or not estimators:
-        raise ValueError("select_model needs at least one friction model and one estimator")
-    for e in estimators:
-        _check_estimator(e)
-    K: Any = getattr(transmission, "matrix", transmission)
-    coupled = K is not None and bool(coupled_motors(K))
-    prepared = Prepared.of(robot, data, validation_of(validation, folds))
-    recordings = _offsets(offset_per_recording, prepared)
-    if base is None:  # computed once for every candidate
-        base = base_parameters(robot)
-    models: list[TorqueModel] = []
-    for friction in frictions:
-        if isinstance(friction, str) and coupled and "coupling" not in friction:
-            friction = friction + "+coupling"
-        model = torque_model(robot, friction, transmission=transmission, base=base,
-                             smooth_velocity=smooth_velocity, recordings=recordings) \
-            if isinstance(friction, str) else torque_model(robot, friction)
-        if all(m.friction != model.friction for m in models):  # "+offset" may repeat one
-            models.append(model)
+        estimators = tuple(e for e in estimators if not checked(e).needs_limits)
+    prepared = Prepared.of(robot, data, validation)
+    models = candidate_models(robot) if models is None else tuple(
+        model_of(robot, m) for m in one_or_more(models, TorqueModel))
+    if not models or not estimators:
+        raise ValueError("select_model needs at least one torque model and one estimator")
     fits = _Fits(progress, len(models) * len(estimators) * len(prepared.splits))
     tried, options = [], []
     for model in models:
         rows = prepared.rows(model, limits)  # one regressor per torque model
         for estimator in estimators:
-            estimator.check(model, limits)
-            settings = {"method": estimator.name, "sigma": getattr(estimator, "sigma", None),
+            checked(estimator).check(model, limits)
+            settings = {"method": estimator.name, "sigma": estimator.sigma,
                         "physical": estimator.physical, "friction": model.friction}
             on_fit = fits.after(f"{estimator.name}{' physical' * estimator.physical}, "
                                 f"{model.friction}")
@@ -375,46 +286,25 @@ class PriorSelection:
 
 def choose_prior_strength(robot: Robot, data: Data,
                           estimator: Estimator = PhysicallyConsistent(),
-                          model: TorqueModel | str | None = None, *old_args: Any,
+                          model: TorqueModel | None = None, *,
                           strengths: Iterable[float] = PRIOR_STRENGTHS,
-                          folds: int | Int[ArrayLike, " T"] | None = None,
-                          validation: Validation | None = None, limits: Limits = None,
-                          transmission: TransmissionLike = None,
-                          base: BaseParameters | None = None,
-                          smooth_velocity: float = SMOOTH_VELOCITY,
-                          offset_per_recording: bool = False,
-                          progress: ProgressCallback | None = None, **old_keywords: Any
-                          ) -> PriorSelection:
+                          validation: Validation = PhaseFolds(), limits: Limits = None,
+                          progress: ProgressCallback | None = None) -> PriorSelection:
     """Choose how strongly a physically consistent fit is pulled toward the a-priori
     parameters (``prior_strength`` of :class:`~._estimators.PhysicallyConsistent`; an
-    ``OLS`` or ``WLS`` ``estimator`` is made physically consistent) by validation
-    (``validation`` or ``folds``, as in :func:`cross_validate`): every strength in
-    ``strengths`` is validated, and the STRONGEST pull whose split-by-split excess over
-    the lowest error is within one standard error is kept (the one-standard-error rule:
-    the most regularised model the data cannot tell from the best). The predicted samples
-    are fitted by nothing, chosen by nothing else. ``progress(label, done, total)`` is
-    called after each fit (``total``: strengths x splits)."""
+    ``OLS`` or ``WLS`` ``estimator`` is made physically consistent) by ``validation``
+    (as in :func:`cross_validate`): every strength in ``strengths`` is validated, and the
+    STRONGEST pull whose split-by-split excess over the lowest error is within one
+    standard error is kept (the one-standard-error rule: the most regularised model the
+    data cannot tell from the best). The predicted samples are fitted by nothing, chosen
+    by nothing else. ``progress(label, done, total)`` is called after each fit
+    (``total``: strengths x splits)."""
     strengths = tuple(float(v) for v in strengths)
     if not strengths or any(not (np.isfinite(v) and v >= 0) for v in strengths):
         raise ValueError(f"strengths must be numbers >= 0, at least one, got {strengths}")
-    if old_args or old_keywords:
-        data = _old_form("choose_prior_strength", data, (estimator, model, *old_args), 4)
-        keywords = {"method": "OLS", **old_keywords, "physical": True}
-        if keywords["method"] not in ("OLS", "WLS"):
-            raise ValueError("the pull to the prior is a physically consistent least-squares "
-                             "fit: method 'OLS' or 'WLS'")
-        estimator, model = from_keywords(robot, keywords, transmission=transmission,
-                                         base=base, smooth_velocity=smooth_velocity)
-        transmission, base, smooth_velocity = None, None, SMOOTH_VELOCITY
-    if isinstance(estimator, OLS):
-        estimator = PhysicallyConsistent(estimator)
-    if not isinstance(estimator, PhysicallyConsistent):
-        raise ValueError(f"the pull to the prior is a physically consistent least-squares "
-                         f"fit: PhysicallyConsistent(...) (of OLS or WLS), not {estimator!r}")
-    prepared = Prepared.of(robot, data, validation_of(validation, folds))
-    model = torque_model(robot, model, transmission=transmission, base=base,
-                         smooth_velocity=smooth_velocity,
-                         recordings=_offsets(offset_per_recording, prepared))
+    estimator = cast(PhysicallyConsistent, checked(estimator).physically_consistent())
+    prepared = Prepared.of(robot, data, validation)
+    model = model_of(robot, model)
     limits = per_joint("limits", limits, robot.n_joints)
     estimator.check(model, limits)
     rows = prepared.rows(model, limits)

@@ -5,7 +5,6 @@ use, and the transmission's coupled motors. Builds on :mod:`sedsabso_jax.dynamic
 
 from __future__ import annotations
 
-from .. import _deprecation
 from ._signal import DEFAULT_CUTOFF_HZ as DEFAULT_CUTOFF_HZ
 from ._signal import differentiate as differentiate
 from ._signal import lowpass as lowpass
@@ -15,12 +14,3 @@ from ._transmission import coupled_motors as coupled_motors
 __all__ = [
     "DEFAULT_CUTOFF_HZ", "lowpass", "differentiate", "median_rate", "coupled_motors",
 ]
-
-#: Names that moved to the package root (0.3), kept with a warning through 0.3.x.
-__getattr__ = _deprecation.moved(__name__, {
-    "Measurements": "sedsabso_jax.Measurements",
-    "load_measurements": "sedsabso_jax.load_measurements",
-    "load_kuka_lwr4": "sedsabso_jax.load_kuka_lwr4",
-    "simulate_measurements": "sedsabso_jax.simulate_measurements",
-    "simulate_measurements_along": "sedsabso_jax.simulate_measurements_along",
-})

@@ -131,14 +131,16 @@ def read_csv(path: Path, source: str, n_joints: int | None) -> tuple[dict, dict]
     for field, cols in columns.items():
         if not cols:
             continue
-        n = len(cols)
         prefix = CSV_PREFIXES[field]
-        if sorted(cols) != list(range(1, n + 1)):
+        top = n_joints if n_joints is not None else max(cols)
+        missing = [f"{prefix}{j}" for j in range(1, top + 1) if j not in cols]
+        if missing:
             raise ValueError(
-                f"{source}: field {field!r}: expected columns {prefix}1..{prefix}{n} "
-                f"(joints numbered from 1, no gaps), got joint numbers {sorted(cols)}"
+                f"{source}: field {field!r}: missing columns {', '.join(missing)} (expected "
+                f"{prefix}1..{prefix}{top}, joints numbered from 1), got joint numbers "
+                f"{sorted(cols)}"
             )
-        counts[field] = n
+        counts[field] = len(cols)
     for field in ("positions", "torques"):
         if field not in counts:
             p = CSV_PREFIXES[field]
