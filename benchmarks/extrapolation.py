@@ -119,7 +119,8 @@ def study(plants: int) -> dict:
     tau_max = np.asarray(limits.tau_max)
     base = sj.base_parameters(robot)
     start = time.perf_counter()
-    designs = [sj.design_excitation(robot, limits, key=seed, iterations=30, base=base,
+    designs = [sj.design_excitation(robot, limits, key=seed, base=base,
+                                    search=sj.excitation.DesignSearch(iterations=30),
                                     duration=DURATION, rate=RATE).trajectory
                for seed in range(plants + 3)]
     design_s = time.perf_counter() - start

@@ -1,14 +1,12 @@
-"""Deprecated names and call forms: each keeps working until the release it names, with a
+"""Deprecated names: each keeps working until the release it names, with a
 DeprecationWarning that points at the caller's line and names the replacement ("... will
 be removed after sedsabso-jax X.Y; use ..."); and the caller's line for other warnings."""
 
 from __future__ import annotations
 
 import functools
-import importlib
 import sys
 import warnings
-from collections.abc import Callable
 from types import FrameType
 from typing import Any, TypeVar
 
@@ -28,12 +26,7 @@ def caller_stacklevel() -> int:
     return level
 
 
-#: The release after which the deprecations of 0.3 (the last ones left, in
-#: :mod:`sedsabso_jax.optim`) go: the default of ``removed_after`` until they are gone.
-REMOVED_AFTER_03 = "0.3"
-
-
-def warn(old: str, new: str, *, removed_after: str = REMOVED_AFTER_03) -> None:
+def warn(old: str, new: str, *, removed_after: str) -> None:
     """Warn that ``old`` is deprecated in favour of ``new`` and goes after release
     ``removed_after`` (e.g. ``"0.5"``)."""
     warnings.warn(f"{old} is deprecated and will be removed after sedsabso-jax "
@@ -41,62 +34,30 @@ def warn(old: str, new: str, *, removed_after: str = REMOVED_AFTER_03) -> None:
                   stacklevel=caller_stacklevel())
 
 
-def renamed_arguments(cls: type[_T], renamed: dict[str, str], *,
-                      removed_after: str = REMOVED_AFTER_03) -> type[_T]:
-    """Let ``cls(old=...)`` stand for ``cls(new=...)`` for each ``old: new``, with a
-    warning that the old name goes after release ``removed_after``. Passing both is a
-    TypeError."""
+def renamed(cls: type[_T], names: dict[str, str], *, removed_after: str) -> type[_T]:
+    """Let the old name stand for the new one, for each ``old: new`` of ``names``, with a
+    warning that the old name goes after release ``removed_after``: ``cls(old=...)`` for
+    ``cls(new=...)`` (passing both is a TypeError) and ``obj.old`` for ``obj.new``."""
     init = cls.__init__
 
     @functools.wraps(init)
     def __init__(self: Any, *args: Any, **kwargs: Any) -> None:
-        for old, new in renamed.items():
+        for old, new in names.items():
             if old in kwargs:
                 if new in kwargs:
                     raise TypeError(f"{cls.__name__}() got both {old}= (deprecated) and {new}=")
-                warn(f"{cls.__name__}({old}=...)", f"{new}=...",
-                     removed_after=removed_after)
+                warn(f"{cls.__name__}({old}=...)", f"{new}=...", removed_after=removed_after)
                 kwargs[new] = kwargs.pop(old)
         init(self, *args, **kwargs)
 
+    def alias(old: str, new: str) -> property:
+        def get(self: Any) -> Any:
+            warn(f"{cls.__name__}.{old}", f"{cls.__name__}.{new}", removed_after=removed_after)
+            return getattr(self, new)
+
+        return property(get, doc=f"Deprecated: :attr:`{new}`.")
+
     cls.__init__ = __init__  # type: ignore[method-assign]
+    for old, new in names.items():
+        setattr(cls, old, alias(old, new))
     return cls
-
-
-def resolve(path: str) -> Any:
-    """The object at the dotted ``path`` (``"sedsabso_jax.robots.rs010n"``): the longest
-    importable module prefix, then attributes."""
-    parts = path.split(".")
-    for k in range(len(parts), 0, -1):
-        try:
-            obj = importlib.import_module(".".join(parts[:k]))
-        except ImportError:
-            continue
-        for name in parts[k:]:
-            obj = getattr(obj, name)
-        return obj
-    raise ImportError(path)
-
-
-def moved(module_name: str, names: dict[str, str | tuple[str, str]],
-          module: str | None = None) -> Callable[[str], Any]:
-    """A module ``__getattr__`` for names that moved: each ``old: "new.dotted.path"`` is
-    served from its new place with a warning naming it (``old: (path, advice)``: the
-    warning gives the advice instead). With ``module`` (a deprecated module path kept as
-    a shim), any other name is looked up there, with a warning. (Used by
-    :mod:`sedsabso_jax.optim` for its 0.3 names only.)"""
-    def __getattr__(name: str) -> Any:
-        if name in names:
-            where = names[name]
-            path, advice = (where, where) if isinstance(where, str) else where
-            warn(f"{module_name}.{name}", advice)
-            return resolve(path)
-        if module is not None and not name.startswith("__"):
-            target = importlib.import_module(module)
-            if hasattr(target, name):
-                warn(f"the module path {module_name}", f"the public names of sedsabso_jax "
-                     f"(the documentation's API pages); {name} is {module}.{name} now")
-                return getattr(target, name)
-        raise AttributeError(f"module {module_name!r} has no attribute {name!r}")
-
-    return __getattr__

@@ -104,7 +104,8 @@ def test_bad_memory_budget(budget):
         lambda: base.regressor(q, q, q, memory_budget=budget),
         lambda: exfit.condition_number(base, q, q, q, memory_budget=budget),
         lambda: sj.design_excitation(robot, sj.JointLimits.rs010n(), memory_budget=budget,
-                                     iterations=1, base=base),
+                                     search=sj.excitation.DesignSearch(iterations=1),
+                                     base=base),
     ]
     for call in calls:
         with pytest.raises(ValueError, match=match):

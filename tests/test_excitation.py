@@ -307,7 +307,8 @@ def test_sampling_margin_bounds_the_peaks_between_samples(seed, N, S):
         assert np.all(peak * (1 - delta) <= sampled * (1 + 1e-12))
 
 
-SMALL = {"solver": sj.LDWPSO(population_size=20), "iterations": 30, "design_samples": 50}
+SMALL = {"search": sj.excitation.DesignSearch(solver=sj.LDWPSO(population_size=20),
+                                              iterations=30, design_samples=50)}
 
 
 @pytest.fixture(scope="module")
@@ -356,7 +357,8 @@ def test_design_input_errors(small_design):
     with pytest.raises(ValueError, match="limits are for 2 joints, robot 'RS010N' has 3"):
         design_excitation(robot, JointLimits([0, 0], [1, 1], [1, 1]), base=base)
     with pytest.raises(ValueError, match="design_samples=8 is too few for 5 harmonics"):
-        design_excitation(robot, lim, design_samples=8, base=base)
+        design_excitation(robot, lim, search=sj.excitation.DesignSearch(design_samples=8),
+                          base=base)
     with pytest.raises(ValueError, match="duration must be a positive number"):
         design_excitation(robot, lim, duration=-1.0, base=base)
     with pytest.raises(TypeError, match="limits must be JointLimits"):

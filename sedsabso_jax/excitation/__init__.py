@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from ._checks import check_trajectory as check_trajectory
 from ._checks import violations as violations
+from ._design import DesignSearch as DesignSearch
 from ._design import ExcitationDesign as ExcitationDesign
 from ._design import coefficient_box as coefficient_box
 from ._design import default_solver as default_solver
@@ -17,6 +18,7 @@ from ._fitness import design_fitness as design_fitness
 from ._fitness import sampling_margin as sampling_margin
 
 __all__ = [
+    "DesignSearch",
     "ExcitationDesign", "coefficient_box", "default_solver", "check_trajectory",
     "violations", "DesignProblem", "design_fitness", "condition_number", "sampling_margin",
     "PENALTY",

@@ -214,28 +214,55 @@ def default_solver() -> LDWPSO:
     return LDWPSO(population_size=40)
 
 
+class DesignSearch(eqx.Module):
+    """How :func:`design_excitation` searches (module docstring): ``solver``, any of the
+    package's swarms (None: :func:`default_solver`), run for ``iterations``; the condition
+    number taken at ``design_samples`` equally spaced times of the experiment;
+    ``graded_penalty`` orders infeasible trajectories by how far they break the limits
+    (False: the paper's constant penalty)."""
+
+    solver: AbstractSwarm | None = None
+    iterations: int = DEFAULT_ITERATIONS
+    design_samples: int = DEFAULT_DESIGN_SAMPLES
+    graded_penalty: bool = True
+
+    def __check_init__(self) -> None:
+        if self.solver is not None and not isinstance(self.solver, AbstractSwarm):
+            raise TypeError(f"solver must be one of the package's swarms (SEDSABSO, BSO, "
+                            f"LDWPSO), got {type(self.solver).__name__}")
+        for name in ("iterations", "design_samples"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
+                    or value < 1:
+                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+        if not isinstance(self.graded_penalty, (bool, np.bool_)):
+            raise TypeError(f"graded_penalty must be True or False, got "
+                            f"{self.graded_penalty!r}")
+
+    @property
+    def swarm(self) -> AbstractSwarm:
+        """The solver, or :func:`default_solver`."""
+        return default_solver() if self.solver is None else self.solver
+
+
 def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = DEFAULT_HARMONICS,
                       wf: float = DEFAULT_WF, duration: float = DEFAULT_DURATION,
-                      rate: float = DEFAULT_RATE, design_samples: int = DEFAULT_DESIGN_SAMPLES,
-                      solver: AbstractSwarm | None = None,
-                      iterations: int = DEFAULT_ITERATIONS,
+                      rate: float = DEFAULT_RATE, search: DesignSearch = DesignSearch(),
                       key: PRNGKeyArray | int | None = None,
-                      graded_penalty: bool = True,
                       base: BaseParameters | None = None,
                       memory_budget: int | None = None) -> ExcitationDesign:
     """Design an excitation trajectory by Eq. 9 with a swarm; compare with random search.
 
-    The experiment samples ``times = arange(round(duration * rate)) / rate``. The swarm's
-    condition number is taken at ``design_samples`` equally spaced times over ``[0,
-    duration)``, the limits at as many over one period with :func:`sampling_margin`, so
-    the design meets them at every time; ``ExcitationDesign.cond`` is recomputed at
-    ``times``. The search box is :func:`coefficient_box`; ``graded_penalty``: see the module
-    docstring. ``solver``: any of the package's swarms (default :func:`default_solver`),
-    run for ``iterations``; ``key``: a JAX PRNG key or an int seed (default 0), the same
-    key giving the same design; ``base``: the robot's base parameters when already
-    computed; ``memory_budget``: bytes the random baseline's batches and the final
-    condition number may take at once on an accelerator (at least 1 MB; see
-    :func:`random_batch`); the CPU keeps its small cache-sized batches. Raises
+    The experiment samples ``times = arange(round(duration * rate)) / rate``. ``search``
+    (:class:`DesignSearch`): the swarm and its iterations, and the design grid: the swarm's
+    condition number is taken at ``search.design_samples`` equally spaced times over
+    ``[0, duration)``, the limits at as many over one period with :func:`sampling_margin`,
+    so the design meets them at every time; ``ExcitationDesign.cond`` is recomputed at
+    ``times``. The search box is :func:`coefficient_box`. ``key``: a JAX PRNG key or an
+    int seed (default 0), the same key giving the same design; ``base``: the robot's base
+    parameters when already computed; ``memory_budget``: bytes the random baseline's
+    batches and the final condition number may take at once on an accelerator (at least
+    1 MB; see :func:`random_batch`); the CPU keeps its small cache-sized batches. Raises
     RuntimeError when the swarm found no feasible trajectory.
     """
     if not isinstance(robot, Robot):
@@ -245,10 +272,12 @@ def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = D
     n = robot.n_joints
     if limits.n_joints != n:
         raise ValueError(f"limits are for {limits.n_joints} joints, robot {robot.name!r} has {n}")
-    for name, value in (("n_harmonics", n_harmonics), ("design_samples", design_samples),
-                        ("iterations", iterations)):
-        if not isinstance(value, (int, np.integer)) or value < 1:
-            raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+    if not isinstance(n_harmonics, (int, np.integer)) or n_harmonics < 1:
+        raise ValueError(f"n_harmonics must be an integer >= 1, got {n_harmonics!r}")
+    if not isinstance(search, DesignSearch):
+        raise TypeError(f"search must be a DesignSearch(solver=..., iterations=..., "
+                        f"design_samples=...), got {type(search).__name__}")
+    design_samples = int(search.design_samples)
     wf = check_wf(wf)
     for name, span in (("duration", duration), ("rate", rate)):
         if not (isinstance(span, (int, float, np.number)) and math.isfinite(span)
@@ -257,8 +286,6 @@ def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = D
     n_samples = int(round(duration * rate))
     if n_samples < 2:
         raise ValueError(f"duration * rate must give at least 2 samples, got {n_samples}")
-    if not isinstance(graded_penalty, (bool, np.bool_)):
-        raise TypeError(f"graded_penalty must be True or False, got {graded_penalty!r}")
     check_memory_budget(memory_budget)
     base = base_parameters(robot) if base is None else base
     if not isinstance(base, BaseParameters) or base.robot.n_params != robot.n_params:
@@ -267,17 +294,15 @@ def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = D
     if design_samples * n < base.rank:
         raise ValueError(f"design_samples * n_joints = {design_samples * n} rows cannot "
                          f"determine {base.rank} base parameters; raise design_samples")
-    if solver is None:
-        solver = default_solver()
     if key is None or isinstance(key, (int, np.integer)):
         key = jax.random.key(0 if key is None else int(key))
     times = np.arange(n_samples) / rate
     problem = DesignProblem.build(robot, base, limits, int(n_harmonics), wf, duration,
-                                  int(design_samples), graded_penalty)
+                                  design_samples, bool(search.graded_penalty))
     lower, upper = check_bounds(*coefficient_box(limits, n_harmonics, wf))
     k_swarm, k_random = jax.random.split(key)
-    result = minimise(design_fitness, solver, lower, upper, key=k_swarm,
-                      iterations=int(iterations), args=problem)
+    result = minimise(design_fitness, search.swarm, lower, upper, key=k_swarm,
+                      iterations=int(search.iterations), args=problem)
     if not float(result.f) < PENALTY:
         raise RuntimeError(
             f"no feasible excitation trajectory for {robot.name!r} in "
@@ -291,7 +316,7 @@ def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = D
     # in batches of a fixed size (one compilation), the best by the same fitness.
     t0 = time.perf_counter()
     budget = int(result.n_evaluations)
-    batch = random_batch(budget, n, int(design_samples), memory_budget)
+    batch = random_batch(budget, n, design_samples, memory_budget)
     lo, hi = jnp.asarray(lower), jnp.asarray(upper)
     best_x, best_f, n_feasible = None, math.inf, 0
     for i in range(math.ceil(budget / batch)):
@@ -311,7 +336,7 @@ def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = D
     return ExcitationDesign(
         trajectory=traj, cond=cond, random_cond=random_cond, times=times, result=result,
         random_trajectory=random_traj, design_cond=float(result.f), n_random=budget,
-        n_random_feasible=n_feasible, design_samples=int(design_samples), random_s=random_s,
+        n_random_feasible=n_feasible, design_samples=design_samples, random_s=random_s,
         robot_name=robot.name,
     )
 

@@ -148,10 +148,12 @@ class Measurements:
 
     @property
     def n_joints(self) -> int:
+        """Joints of the recording (columns of ``q``)."""
         return self.q.shape[1]
 
     @property
     def n_samples(self) -> int:
+        """Samples of the recording (rows of ``q``)."""
         return self.times.shape[0]
 
     @property

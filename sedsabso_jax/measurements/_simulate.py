@@ -30,15 +30,16 @@ def _nonnegative(label: str, value, upper: float | None = None) -> float:
 
 def simulate_measurements(robot: Robot, q: Float[ArrayLike, "T n"], qd: Float[ArrayLike, "T n"],
                           qdd: Float[ArrayLike, "T n"], times: Float[ArrayLike, " T"], *,
-                          params: Float[ArrayLike, " p"] | None = None, torque_noise: float = 0.0,
+                          torque_noise: float = 0.0,
                           position_noise: float = 0.0, outlier_fraction: float = 0.0,
                           outlier_scale: float = DEFAULT_OUTLIER_SCALE,
                           seed: int | None = 0) -> Measurements:
     """Measurements of ``robot`` moving along ``q, qd, qdd (T, n)`` at ``times (T,)``.
 
-    Torques ``inverse_dynamics(robot, params, q, qd, qdd)`` (``params`` default
-    ``robot.params``), then, with ``numpy.random.default_rng`` streams spawned from
-    ``seed`` (one each, so turning one kind of noise on does not change the others):
+    Torques ``inverse_dynamics(robot, robot.params, q, qd, qdd)`` (a plant of other
+    parameters ``p``: ``equinox.tree_at(lambda r: r.params, robot, p)``), then, with
+    ``numpy.random.default_rng`` streams spawned from ``seed`` (one each, so turning one
+    kind of noise on does not change the others):
 
     - ``torque_noise``: Gaussian, standard deviation ``torque_noise`` times each joint's
       RMS noise-free torque (0.02 = 2 %);
@@ -64,8 +65,7 @@ def simulate_measurements(robot: Robot, q: Float[ArrayLike, "T n"], qd: Float[Ar
         if fields[key] is None:
             raise ValueError(f"{source}: field {key!r}: missing")
     q, qd, qdd = fields["positions"], fields["velocities"], fields["accelerations"]
-    params = robot.params if params is None else params
-    tau = np.array(inverse_dynamics(robot, params, q, qd, qdd), dtype=np.float64)
+    tau = np.array(inverse_dynamics(robot, robot.params, q, qd, qdd), dtype=np.float64)
     rms = np.sqrt(np.mean(tau**2, axis=0))
     T = tau.shape[0]
     rng_tau, rng_q, rng_out = (np.random.default_rng(s)
@@ -79,7 +79,7 @@ def simulate_measurements(robot: Robot, q: Float[ArrayLike, "T n"], qd: Float[Ar
         sign = rng_out.choice(np.array([-1.0, 1.0]), size=n_outliers)
         rows, cols = np.unravel_index(flat, (T, n))
         tau[rows, cols] += sign * outlier_scale * rms[cols]
-    info = {"params": "robot.params" if params is robot.params else "given",
+    info = {"params": "robot.params",
             "torque_noise": torque_noise, "position_noise": position_noise,
             "outlier_fraction": outlier_fraction, "outlier_scale": outlier_scale,
             "n_outliers": n_outliers, "seed": seed,

@@ -115,12 +115,6 @@ class BSO(AbstractSwarm):
         return cls()
 
     @property
-    def n_beetles(self) -> int:
-        """Deprecated: :attr:`population_size`."""
-        _deprecation.warn("BSO.n_beetles", "BSO.population_size")
-        return self.population_size
-
-    @property
     def antenna(self) -> float:
         return self.beetle.antenna
 
@@ -143,4 +137,5 @@ class BSO(AbstractSwarm):
         return replace(s, guide_x=gx, guide_f=gf)
 
 
-_deprecation.renamed_arguments(BSO, {"n_beetles": "population_size"})
+#: The population argument of 0.4 and before, kept through 0.5.x.
+_deprecation.renamed(BSO, {"n_beetles": "population_size"}, removed_after="0.5")

@@ -42,12 +42,6 @@ class LDWPSO(AbstractSwarm):
         """N = 50, c1 = c2 = 2, w from 0.9 to 0.4, Vmax = 0.5 (ub - lb)."""
         return cls()
 
-    @property
-    def n_particles(self) -> int:
-        """Deprecated: :attr:`population_size`."""
-        _deprecation.warn("LDWPSO.n_particles", "LDWPSO.population_size")
-        return self.population_size
-
     def vmax(self, lower: Bounds, upper: Bounds) -> Float[Array, " d"]:
         return self.vmax_fraction * (upper - lower)
 
@@ -71,4 +65,5 @@ class LDWPSO(AbstractSwarm):
         return replace(s, guide_x=gx, guide_f=gf)
 
 
-_deprecation.renamed_arguments(LDWPSO, {"n_particles": "population_size"})
+#: The population argument of 0.4 and before, kept through 0.5.x.
+_deprecation.renamed(LDWPSO, {"n_particles": "population_size"}, removed_after="0.5")

@@ -92,12 +92,6 @@ class SEDSABSO(AbstractSwarm):
         return cls()
 
     @property
-    def n_start(self) -> int:
-        """Deprecated: :attr:`population_size` (N_start of Eq. 15)."""
-        _deprecation.warn("SEDSABSO.n_start", "SEDSABSO.population_size")
-        return self.population_size
-
-    @property
     def antenna(self) -> float:
         return self.beetle.antenna
 
@@ -204,4 +198,5 @@ class SEDSABSO(AbstractSwarm):
             temperature=s.temperature * self.decay)
 
 
-_deprecation.renamed_arguments(SEDSABSO, {"n_start": "population_size"})
+#: The population argument of 0.4 and before, kept through 0.5.x.
+_deprecation.renamed(SEDSABSO, {"n_start": "population_size"}, removed_after="0.5")

@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -46,7 +45,7 @@ from ..dynamics import _robots as robots
 from ..dynamics._base_parameters import BaseParameters, base_parameters
 from ..dynamics._limits import JointLimits
 from ..dynamics._robot import Robot
-from ..excitation._design import ExcitationDesign, design_excitation
+from ..excitation._design import DesignSearch, ExcitationDesign, design_excitation
 from ..measurements._container import Measurements
 from ..measurements._simulate import simulate_measurements
 from ..optim import _baselines as baselines
@@ -153,11 +152,11 @@ def build_problem(settings: Settings = Settings(),
     true = np.asarray(base.values, dtype=float)
 
     progress("excitation design (Eq. 9)")
-    design_kw: dict[str, Any] = {} if settings.design_iterations is None else {
-        "iterations": settings.design_iterations}
+    search = DesignSearch() if settings.design_iterations is None else DesignSearch(
+        iterations=settings.design_iterations)
     design = design_excitation(robot, JointLimits.rs010n(), duration=DURATION,
-                               rate=settings.samples / DURATION,
-                               key=jax.random.fold_in(key, 0), base=base, **design_kw)
+                               rate=settings.samples / DURATION, search=search,
+                               key=jax.random.fold_in(key, 0), base=base)
     times = np.asarray(design.times, dtype=float)[: settings.samples]
 
     progress("simulated measurements")

@@ -11,16 +11,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .. import paper
-from .._output import (
-    PathLike,
-    columns_note,
-    markdown_table,
-    pyplot,
-    save_figure,
-    to_json,
-    write_text,
-)
+from .. import _output, paper
+from .._output import PathLike, to_json, write_text
 from ..dynamics._base_parameters import base_parameters
 from ..dynamics._robot import Robot
 from ..identification._report import PARAMETER_UNITS
@@ -64,8 +56,8 @@ def base_parameter_table(robot: Robot, *, paper_columns: bool = False) -> str:
         rows.append(row)
     return "\n".join([
         f"{robot.name}: {base.rank} base parameters of {robot.n_params} "
-        f"({robot.n_joints} joints x 12)", "", markdown_table(head, rows), "",
-        columns_note(*defs)])
+        f"({robot.n_joints} joints x 12)", "", _output.markdown_table(head, rows), "",
+        _output.columns_note(*defs)])
 
 
 def _g(x, digits: int = 3) -> str:
@@ -82,8 +74,8 @@ def _settings_line(results: dict) -> str:
 
 
 def _document(title: str, results: dict, head, rows, note: str) -> str:
-    return "\n".join([title, "", _settings_line(results), "", markdown_table(head, rows), "",
-                      note, ""])
+    table = _output.markdown_table(head, rows)
+    return "\n".join([title, "", _settings_line(results), "", table, "", note, ""])
 
 
 #: The methods of Tables 4 and 5.
@@ -106,7 +98,7 @@ def table4(results: dict) -> str:
                      _g(a["time_mean_s"], 3), _g(a["batched_time_s"], 3),
                      _g(a["compile_s"], 3), _g(a["max_abs_error"], 3),
                      _g(a["gap_to_l1_optimum"], 3), _g(fit), _g(secs, 4)])
-    return _document("# Table 4: final fitness and time per run", results, head, rows, columns_note(
+    note = _output.columns_note(
         ("method", METHODS),
         (("fitness mean [N m]", "fitness std [N m]"), "mean and standard deviation (ddof 0, "
          "0 for a baseline) over the runs of Eq. 17, the sum over samples and joints of "
@@ -122,7 +114,8 @@ def table4(results: dict) -> str:
          "noise-free data f_L1 is rounding noise, and 1e6 means an excess of 1e-3 sum |tau|)"),
         (("paper's fitness mean", "paper's time/run [s]"), "the paper's Table 4 as published "
          "(MATLAB 9.1, i7-8550U, 10 runs, other data, excitation and search box: compare "
-         "orders of magnitude, not digits)")))
+         "orders of magnitude, not digits)"))
+    return _document("# Table 4: final fitness and time per run", results, head, rows, note)
 
 
 def table5(results: dict) -> str:
@@ -146,13 +139,14 @@ def table5(results: dict) -> str:
         row += [_g(theo, 4), *(_g(v, 4) for v in ident)]
         rows.append(row)
     defs = _parameter_columns("name", "true", "from the paper's Table 2")
-    return _document("# Table 5: identified base parameters", results, head, rows, columns_note(
+    note = _output.columns_note(
         *defs,
         (methods, "the method's value, the mean over a swarm's runs: " + METHODS),
         ([f"{m} err" for m in methods], "|value - true|, in the parameter's unit"),
         ("paper's theoretical", "the paper's Table 5 theoretical value as published"),
         (paper_heads, "the paper's Table 5 identified values as published (inconsistent "
-         "with Table 2 in places, see sedsabso_jax/paper.py: context, not a target)")))
+         "with Table 2 in places, see sedsabso_jax/paper.py: context, not a target)"))
+    return _document("# Table 5: identified base parameters", results, head, rows, note)
 
 
 def figure_population(history_n: dict, phases: dict) -> Figure:
@@ -160,7 +154,7 @@ def figure_population(history_n: dict, phases: dict) -> Figure:
     areas (total beetle-iterations, i.e. work) shaded and given in the legend; for a swarm
     with ``phases`` (``[(first, end, slots), ...]``, its compiled phases), the slots
     actually computed."""
-    plt = pyplot()
+    plt = _output.pyplot()
     fig, ax = plt.subplots(figsize=(7, 4), constrained_layout=True)
     for name in ("SEDSABSO", "BSO"):
         if name not in history_n:
@@ -188,7 +182,7 @@ def figure_population(history_n: dict, phases: dict) -> Figure:
 def figure_convergence(history_f: dict, l1_floor: float) -> Figure:
     """Figure 6: best fitness against iteration (log scale), median and min-max band over
     the runs per swarm, the exact L1 optimum as a horizontal line."""
-    plt = pyplot()
+    plt = _output.pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
     lowest = np.inf
     for name, hf in history_f.items():
@@ -238,10 +232,10 @@ def write_outputs(experiment: Experiment, out_dir: PathLike | None,
             written.append(path)
         for name, fig in (("fig5_population.png", fig5), ("fig6_convergence.png", fig6)):
             path = os.path.join(out_dir, name)
-            save_figure(fig, path)
+            _output.save_figure(fig, path)
             written.append(path)
     else:
-        pyplot().close("all")
+        _output.pyplot().close("all")
     if json_path is not None:
         os.makedirs(os.path.dirname(os.path.abspath(json_path)), exist_ok=True)
         write_text(json_path, text)
