@@ -208,3 +208,30 @@ def test_benchmarks_and_notebooks_use_the_public_api(path):
         text = "\n".join("".join(c["source"]) for c in json.loads(text)["cells"]
                          if c["cell_type"] == "code")
     assert not _private_uses(text), _private_uses(text)
+
+
+# ------------------------------------------------------------------- sizes of the parts
+#: The largest module (lines) and the most parameters a function takes; the command
+#: line's parser functions (``add_parser``) are exempt, their flags being their job.
+MAX_LINES, MAX_PARAMETERS = 400, 10
+
+
+def _parameters(node: ast.FunctionDef | ast.AsyncFunctionDef) -> int:
+    a = node.args
+    count = (len(a.posonlyargs) + len(a.args) + len(a.kwonlyargs) + (a.vararg is not None)
+             + (a.kwarg is not None))
+    return count - bool(a.args and a.args[0].arg in ("self", "cls"))
+
+
+def test_modules_and_functions_stay_small():
+    long, wide = [], []
+    for path in sorted(ROOT.rglob("*.py")):
+        text = path.read_text(encoding="utf-8")
+        if len(text.splitlines()) > MAX_LINES:
+            long.append(f"{path.relative_to(ROOT)}: {len(text.splitlines())} lines")
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) \
+                    and node.name != "add_parser" and _parameters(node) > MAX_PARAMETERS:
+                wide.append(f"{path.relative_to(ROOT)}: {node.name}({_parameters(node)})")
+    assert not long, f"modules over {MAX_LINES} lines: {long}"
+    assert not wide, f"functions over {MAX_PARAMETERS} parameters: {wide}"

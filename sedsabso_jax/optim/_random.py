@@ -13,7 +13,7 @@ the numbers are the same either way.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import jax
 import jax.numpy as jnp
@@ -21,8 +21,13 @@ import numpy as np
 from jax.typing import DTypeLike
 from jaxtyping import Array, Float, PRNGKeyArray
 
-if TYPE_CHECKING:
-    from ._swarm import AbstractSwarm
+
+class Drawing(Protocol):
+    """What draws an iteration's random numbers (a swarm: :class:`~._swarm.AbstractSwarm`)."""
+
+    def randomness(self, key: PRNGKeyArray, dim: int, dtype: DTypeLike) -> Any: ...
+
+    def draw(self, randomness: Any, shape: tuple[int, ...], dtype: DTypeLike) -> Any: ...
 
 #: Largest population draws made before a phase's loop, per run (bytes), see
 #: :func:`fits_before_loop`.
@@ -35,7 +40,7 @@ def next_key(key: PRNGKeyArray) -> tuple[PRNGKeyArray, PRNGKeyArray]:
     return key, sub
 
 
-def iteration_randomness(solver: AbstractSwarm, key: PRNGKeyArray, iterations: int, dim: int,
+def iteration_randomness(solver: Drawing, key: PRNGKeyArray, iterations: int, dim: int,
                          dtype: DTypeLike) -> Any:
     """Every iteration's randomness (``solver.randomness`` of its key ``sub``, the chain of
     :func:`next_key` from ``key``), derived before the loop and vectorised over the
@@ -47,7 +52,7 @@ def iteration_randomness(solver: AbstractSwarm, key: PRNGKeyArray, iterations: i
     return jax.vmap(lambda k: solver.randomness(k, dim, dtype))(subs)
 
 
-def fits_before_loop(solver: AbstractSwarm, randomness: Any, shape: tuple[int, ...],
+def fits_before_loop(solver: Drawing, randomness: Any, shape: tuple[int, ...],
                      dtype: DTypeLike, length: int) -> bool:
     """Whether a phase's population draws (``length`` iterations of ``shape``) fit in
     :data:`BEFORE_LOOP_BYTES`. Made inside the loop, XLA fuses the hash into each fusion
