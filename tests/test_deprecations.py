@@ -1,7 +1,8 @@
 """Deprecations: the warning a deprecated name gives (DeprecationWarning at the caller's
 line, "will be removed after sedsabso-jax X.Y", the release given), and what 0.5 removed
-of 0.3's deprecations (outside sedsabso_jax.optim): 0.2's call forms, the moved-name
-tables and the old module paths are gone, each an ordinary error."""
+of 0.3's deprecations: 0.2's call forms, the moved-name tables and the old module paths
+are gone, each an ordinary error. (0.5's own: the swarms' population argument,
+``tests/test_solver_paths.py``.)"""
 
 from __future__ import annotations
 
@@ -24,10 +25,13 @@ def test_a_deprecation_names_its_release_and_points_at_the_caller():
         def __init__(self, size=1):
             self.size = size
 
-    _deprecation.renamed_arguments(Thing, {"n": "size"}, removed_after="0.6")
+    _deprecation.renamed(Thing, {"n": "size"}, removed_after="0.6")
     with pytest.deprecated_call(match=r"^Thing\(n=\.\.\.\) is deprecated and will be removed "
                                       r"after sedsabso-jax 0\.6; use size=\.\.\.$"):
-        assert Thing(n=3).size == 3
+        thing = Thing(n=3)
+    assert thing.size == 3
+    with pytest.deprecated_call(match=r"^Thing\.n is deprecated .* 0\.6; use Thing\.size$"):
+        assert thing.n == 3
     with pytest.raises(TypeError, match=r"both n= \(deprecated\) and size="):
         Thing(n=3, size=4)
 
@@ -38,7 +42,8 @@ def test_a_deprecation_names_its_release_and_points_at_the_caller():
     ("sedsabso_jax.dynamics", "robots"), ("sedsabso_jax.measurements", "Measurements"),
     ("sedsabso_jax.excitation", "search_box"), ("sedsabso_jax.excitation", "JointLimits"),
     ("sedsabso_jax.identification", "identify"), ("sedsabso_jax.identification", "Model"),
-    ("sedsabso_jax.identification", "METHODS"),
+    ("sedsabso_jax.identification", "METHODS"), ("sedsabso_jax.optim", "minimise"),
+    ("sedsabso_jax.optim", "SEDSABSO"), ("sedsabso_jax.optim", "baselines"),
 ])
 def test_moved_names_of_0_3_are_gone(module, name):
     with pytest.raises(AttributeError):
@@ -66,3 +71,10 @@ def test_0_2_call_forms_are_gone():
         sj.select_model(robot, (z[:, 0], z, z, z, z), weightings=(("OLS", None),))
     with pytest.raises(TypeError):
         sj.select_and_identify(robot, (z[:, 0], z, z, z, z), frictions=("offset",))
+
+
+def test_0_3_solver_names_are_gone():
+    for old in ("q", "f_min", "f_max"):  # renamed in 0.3: n_trials, exponent_start, ..._end
+        with pytest.raises(TypeError):
+            sj.SEDSABSO(**{old: 1})
+    assert not hasattr(sj.SEDSABSO(), "check")  # hyperparameters are checked when built
