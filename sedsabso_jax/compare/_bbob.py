@@ -1,0 +1,139 @@
+"""COCO's ``bbob`` suite as ``sedsabso-jax compare`` runs it: the 24 noiseless functions,
+COCO's dimensions, and COCO's numbered instances.
+
+Instances: by default COCO's current ones, ``1-5,101-110`` (``cocoex.Suite("bbob",
+"year: 2025", "")``, the BBOB workshops' set since 2023); cocopp knows each year's set
+(``cocopp.genericsettings.instancesOfInterest``) and warns on others, so the default data
+go beside archived algorithms without a warning. cocoex without a year gives the 2018 set,
+``1-5,71-80``, which cocopp also accepts. One run per instance, as COCO does since 2010;
+an instance named k times gets k runs (``1-5,1-5,1-5``: the 2009 set).
+
+Dimensions: COCO's, 2, 3, 5, 10, 20 and 40 (cocopp's figures and tables show these).
+
+The functions evaluate through cocoex itself (COCO's C code, one point at a time, from a
+JAX callback) until the JAX implementation of COCO's functions lands.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import re
+import tempfile
+import threading
+from collections.abc import Iterable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+#: COCO's names of f1-f24 (cocopp's ``bbob-benchmarkshortinfos.txt``), short forms
+FUNCTIONS = ("sphere", "ellipsoid", "rastrigin", "bueche-rastrigin", "linear-slope",
+             "attractive-sector", "step-ellipsoid", "rosenbrock", "rosenbrock-rotated",
+             "ellipsoid-rotated", "discus", "bent-cigar", "sharp-ridge", "different-powers",
+             "rastrigin-rotated", "weierstrass", "schaffer-f7", "schaffer-f7-cond-1000",
+             "griewank-rosenbrock", "schwefel", "gallagher-101", "gallagher-21", "katsuura",
+             "lunacek")
+DIMENSIONS = (2, 3, 5, 10, 20, 40)
+DEFAULT_INSTANCES = (1, 2, 3, 4, 5, *range(101, 111))
+#: the largest instance number accepted (COCO's seeds are function + 10000 instance)
+MAX_INSTANCE = 100000
+BOX = 5.0
+
+
+def parse_numbers(text: str | Iterable[int], what: str) -> tuple[int, ...]:
+    """``"1-5,101-110"`` (or integers) -> the numbers, in order, ranges expanded."""
+    if not isinstance(text, str):
+        return tuple(int(v) for v in text)
+    out: list[int] = []
+    for part in text.split(","):
+        m = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", part)
+        if not m or (m.group(2) and int(m.group(2)) < int(m.group(1))):
+            raise ValueError(f"--{what}: expected comma-separated numbers and ranges, e.g. "
+                             f"1-5,101-110, got {text!r}")
+        out += range(int(m.group(1)), int(m.group(2) or m.group(1)) + 1)
+    return tuple(out)
+
+
+def check(functions: Iterable[int], dimensions: Iterable[int],
+          instances: Iterable[int]) -> None:
+    """ValueError naming what is unknown and what was expected."""
+    def bad(v, ok) -> bool:
+        return isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not ok(v)
+
+    functions, instances = tuple(functions), tuple(instances)
+    for f in functions:
+        if bad(f, lambda v: 1 <= v <= len(FUNCTIONS)):
+            raise ValueError(f"unknown BBOB function {f!r}; expected 1 to {len(FUNCTIONS)}")
+    for d in dimensions:
+        if bad(d, lambda v: v in DIMENSIONS):
+            raise ValueError(f"unknown BBOB dimension {d!r}; expected one of COCO's "
+                             f"{', '.join(map(str, DIMENSIONS))}")
+    for i in instances:
+        if bad(i, lambda v: 1 <= v <= MAX_INSTANCE):
+            raise ValueError(f"unknown BBOB instance {i!r}; expected COCO's instance "
+                             f"numbers, 1 to {MAX_INSTANCE}")
+    if not functions or not instances:
+        raise ValueError("BBOB needs at least one function and one instance")
+    counts = {i: instances.count(i) for i in instances}
+    if len(set(counts.values())) > 1:
+        raise ValueError(f"every BBOB instance must be named equally often (cocopp expects "
+                         f"the same number of runs on each), got {instances}")
+
+
+def problem_name(function: int, dim: int) -> str:
+    return f"bbob-f{function:02d}-{FUNCTIONS[function - 1]}-d{dim:02d}"
+
+
+def parse_name(name: str) -> tuple[int, int] | None:
+    """``(function, dimension)`` of a BBOB problem's name, None for another name."""
+    m = re.fullmatch(r"bbob-f(\d\d)-[a-z0-9-]+-d(\d\d)", name)
+    return (int(m.group(1)), int(m.group(2))) if m else None
+
+
+# ------------------------------------------------------------------ cocoex (for now)
+_LOCK = threading.Lock()
+
+
+@functools.cache
+def _cocoex_problem(function: int, instance: int, dim: int):
+    import cocoex
+
+    suite = cocoex.Suite("bbob", f"instances: {instance}",
+                         f"function_indices: {function} dimensions: {dim}")
+    return suite, suite.get_problem_by_function_dimension_instance(function, dim, instance)
+
+
+@functools.cache
+def f_opt(function: int, instance: int, dim: int) -> float:
+    """COCO's optimal value of an instance: its function at COCO's ``best_parameter``."""
+    _, problem = _cocoex_problem(function, instance, dim)
+    with _LOCK, tempfile.TemporaryDirectory() as tmp:
+        here = os.getcwd()
+        os.chdir(tmp)
+        try:
+            problem._best_parameter("print")
+            x_opt = np.loadtxt("._bbob_problem_best_parameter.txt", ndmin=1)
+        finally:
+            os.chdir(here)
+    return float(problem(x_opt))
+
+
+def _evaluate(x: np.ndarray, function: np.ndarray, instance: np.ndarray) -> np.ndarray:
+    flat = np.asarray(x, dtype=float).reshape(-1, x.shape[-1])
+    _, problem = _cocoex_problem(int(np.ravel(function)[0]), int(np.ravel(instance)[0]),
+                                 x.shape[-1])
+    return np.array([problem(row) for row in flat]).reshape(x.shape[:-1]).astype(x.dtype)
+
+
+def value(x: jax.Array, args: tuple[jax.Array, jax.Array]) -> jax.Array:
+    """BBOB function ``args[0]`` (1-24), instance ``args[1]`` (COCO's number), at ``x``."""
+    function, instance = args
+    out = jax.ShapeDtypeStruct(x.shape[:-1], x.dtype)
+    return jax.pure_callback(_evaluate, out, x, function, instance, vmap_method="broadcast_all")
+
+
+def instance_args(function: int, instance: int, dim: int) -> tuple[jax.Array, jax.Array]:
+    """The runtime arguments of :func:`value` for one instance."""
+    _cocoex_problem(function, instance, dim)
+    return jnp.int32(function), jnp.int32(instance)
