@@ -7,9 +7,11 @@ best value after each iteration (generation) and the cumulative evaluation count
 known (:func:`sedsabso_jax.evaluation_counts`). The lines follow the observer's rules
 with the iteration as the unit of time:
 
-- ``.dat`` (targets): a line at evaluation 1, then whenever the best value improves past
-  a new target ``10**(k/100)`` (``number_target_triggers`` 100, ``log_target_precision``
-  1e-8: below it every value counts as 1e-8, and 0 as 1e-9), and at the last evaluation;
+- ``.dat`` (targets): a line at evaluation 1, then whenever the best ``f - f_opt``
+  improves past a new target ``10**(k/20)`` (``number_target_triggers`` 20,
+  ``log_target_precision`` 1e-8: below it every value counts as 1e-8, and 0 as 1e-9) or
+  a new multiple of 1e5 (``lin_target_precision``; below 1e-12 it counts as 0), and at
+  the last evaluation;
 - ``.tdat`` (budgets): a line at evaluation 1, then whenever the evaluations pass
   ``floor(10**(k/20))`` or ``dim * {1, 2, 5} * 10**k``, and at the last evaluation.
 
@@ -45,8 +47,9 @@ from .._output import PathLike, write_text
 LOGGED_INFINITY = 3e21
 #: the version of COCO whose bbob observer the files follow
 COCO_VERSION = "2.8.2"
-TARGET_TRIGGERS = 100  # per decade
+TARGET_TRIGGERS = 20  # per decade
 TARGET_PRECISION = 1e-8
+LINEAR_PRECISION = 1e5
 EVALUATION_TRIGGERS = 20  # per decade
 BASE_EVALUATIONS = (1, 2, 5)
 HEADER = ("% f evaluations | g evaluations | best noise-free fitness - Fopt ({:13.12e}) + "
@@ -59,20 +62,33 @@ CONVERSION = ("written by sedsabso-jax from per-iteration best values: a target 
               "(its value is not kept); measured fitness = best fitness; no x columns")
 
 
+def _round_up(number: float, precision: float) -> float:
+    """``coco_double_round_up_with_precision``."""
+    rounded_up = math.ceil(number / precision) * precision
+    rounded = math.floor(number / precision + 0.5) * precision
+    if abs(rounded - rounded_up) < precision or abs(number - rounded) >= 1e-12:
+        return rounded_up
+    return rounded
+
+
 class _TargetTrigger:
-    """``coco_observer_log_targets_trigger`` for values >= 0."""
+    """``coco_observer_targets_trigger`` (logarithmic or linear targets) for values >= 0."""
 
     def __init__(self) -> None:
-        self.exponent = math.inf
+        self.exponent, self.linear = math.inf, math.inf
 
     def __call__(self, value: float) -> bool:
         verified = (TARGET_PRECISION / 10.0 if value == 0 else
                     TARGET_PRECISION if value < TARGET_PRECISION else value)
         exponent = math.ceil(math.log10(verified) * TARGET_TRIGGERS)
-        if exponent < self.exponent:
+        log = exponent < self.exponent
+        if log:
             self.exponent = exponent
-            return True
-        return False
+        linear = _round_up(value, LINEAR_PRECISION)
+        lin = linear < self.linear
+        if lin:
+            self.linear = linear
+        return log or lin
 
 
 class _EvaluationTrigger:
