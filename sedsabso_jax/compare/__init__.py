@@ -5,6 +5,9 @@ runs and writes. Builds on every layer below it (the identification problems com
 
 - :mod:`._problems`: BBOB f1-f24 (evosax's JAX implementation) and the identification
   problems, with their known optima;
+- :mod:`._coco`: COCO's bbob suite f1-f24 with COCO's numbered instances, the values of
+  ``cocoex`` to rounding (:func:`coco_function`; one compiled fitness per dimension for
+  all functions and instances: ``coco_args``, ``coco_value``);
 - :mod:`._statistics`: median / IQR, Mann-Whitney U with Holm's correction, Vargha-Delaney
   A12, run lengths and their ECDF;
 - :mod:`._run`: the runs, one resumable JSON file per problem;
@@ -13,6 +16,7 @@ runs and writes. Builds on every layer below it (the identification problems com
 
 from __future__ import annotations
 
+from ._coco import coco_function as coco_function
 from ._problems import SUITES as SUITES
 from ._problems import Problem as Problem
 from ._problems import load_problem as load_problem
@@ -36,4 +40,5 @@ __all__ = [
     "Settings", "compare", "run_problem", "solver_for", "parse_budget",
     "DEFAULT_ALGORITHMS", "DEFAULT_BUDGET", "Problem", "problem_names", "load_problem",
     "SUITES", "summary", "a12", "holm", "pairwise", "run_lengths", "ecdf", "write_report",
+    "coco_function",
 ]
