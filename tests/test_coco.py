@@ -2,7 +2,8 @@
 own C code (coco-experiment), value by value: every function f1-f24 in dimensions 2, 3,
 5, 10, 20 and 40, instances 1-15, at 5 random points of [-5, 5]^d, 2 points of [-7, 7]^d
 (mostly outside the box: the penalties), 3 points near x_opt (1e-3 away) and x_opt
-itself. x_opt and f_opt equal COCO's ``best_parameter`` and ``best_value`` exactly.
+itself; in d = 2 also the instances of recent workshops (71-80, 101-110) and the largest
+number. x_opt and f_opt equal COCO's ``best_parameter`` and ``best_value`` exactly.
 
 Precision: ``|f - f_coco| <= 1e-10 max(|f_coco|, |f_coco - f_opt|)``. The scale is the
 larger of the two terms COCO adds last (``f - f_opt`` and ``f_opt``): where they nearly
@@ -11,6 +12,8 @@ means nothing (f19 near ``f = 0`` differs by 1e-10 of ``|f|`` for that reason al
 
 Also: the compiled function under ``vmap`` and ``jit``, float64, one compilation for all
 functions and instances of a dimension, and the one-line errors for bad arguments.
+About 20-30 s on 2 cores (most of it one compilation per dimension and d = 40's
+rotations).
 """
 
 from __future__ import annotations
@@ -61,6 +64,22 @@ def test_every_function_and_instance_matches_cocoex(dim):
     bad = {f: w for f, w in worst.items() if not w[0] <= TOLERANCE}
     assert not bad, (f"d = {dim}: (largest relative difference, instance) per function "
                      f"above {TOLERANCE}: {bad}")
+
+
+def test_recent_and_extreme_instance_numbers():
+    """The instances of recent BBOB workshops (2018: 71-80, 2023: 101-110) and the largest
+    number, in d = 2 (compiled above)."""
+    rng = np.random.default_rng(7)
+    for function in range(1, 25):
+        for instance in (*range(71, 81), *range(101, 111), 2**31 - 1):
+            coco = cocoex.BareProblem("bbob", function, 2, instance)
+            f_opt, x_opt = coco_optimum(function, instance, 2)
+            assert f_opt == coco.best_value() and np.array_equal(x_opt, coco.best_parameter())
+            X = points(rng, x_opt)
+            want = coco(X)
+            got = np.asarray(coco_values(X, coco_args(function, instance, 2)))
+            scale = np.maximum(np.abs(want), np.abs(want - f_opt))
+            assert np.max(np.abs(got - want) / scale) <= TOLERANCE, (function, instance)
 
 
 def test_function_is_compiled_vmappable_float64():
