@@ -3,7 +3,10 @@ evaluations, many seeded runs, a standard suite, statistics, and COCO's data for
 ``sedsabso-jax compare`` runs and writes. Builds on every layer below it (the
 identification problems come from ``reproduce``'s experiment and the real KUKA data).
 
-- :mod:`._bbob`: COCO's ``bbob`` suite (functions, dimensions, numbered instances);
+- :mod:`._coco`: COCO's bbob suite f1-f24 with COCO's numbered instances, the values of
+  ``cocoex`` to rounding (:func:`coco_function`; one compiled fitness per dimension for
+  all functions and instances: ``coco_args``, ``coco_value``);
+- :mod:`._bbob`: the suite as ``compare`` runs it (dimensions, default instances, names);
 - :mod:`._problems`: the BBOB and identification problems, with their known optima;
 - :mod:`._statistics`: median / IQR, Mann-Whitney U with Holm's correction, Vargha-Delaney
   A12, run lengths, their ECDF and the average runtime (aRT);
@@ -19,6 +22,7 @@ from __future__ import annotations
 from ._bbob import DEFAULT_INSTANCES as DEFAULT_INSTANCES
 from ._bbob import DIMENSIONS as DIMENSIONS
 from ._campaign import compare as compare
+from ._coco import coco_function as coco_function
 from ._problems import SUITES as SUITES
 from ._problems import Problem as Problem
 from ._problems import load_problem as load_problem
@@ -43,6 +47,7 @@ from ._statistics import summary as summary
 
 __all__ = [
     "Settings", "Task", "compare", "run_task", "run_problem", "solver_for", "parse_budget",
+    "coco_function",
     "DEFAULT_ALGORITHMS", "DEFAULT_BUDGET", "DEFAULT_INSTANCES", "DIMENSIONS", "Problem",
     "problem_names", "load_problem", "SUITES", "summary", "a12", "holm", "pairwise",
     "run_lengths", "ecdf", "average_runtime", "COCO_TARGETS", "write_report",
