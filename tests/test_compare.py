@@ -6,9 +6,11 @@ tests/test_compare_coco.py; Dask: tests/test_compare_campaigns.py."""
 from __future__ import annotations
 
 import json
+import shutil
 
 import numpy as np
 import pytest
+from conftest import SMALL_CAMPAIGN
 
 from sedsabso_jax import cli
 from sedsabso_jax.compare import _bbob as B
@@ -16,7 +18,6 @@ from sedsabso_jax.compare import _run as R
 from sedsabso_jax.optim._linear import l1_solve, l1_solve_box
 
 pytest.importorskip("evosax")
-pytest.importorskip("cocoex")
 
 
 def test_l1_optimum_in_a_box_matches_cvxpy():
@@ -92,31 +93,37 @@ def test_bad_input_exits_2_and_writes_nothing(tmp_path, capsys, args, message):
     assert not out.exists()
 
 
-def test_compare_runs_resumes_and_refuses_other_settings(tmp_path, capsys):
+def test_compare_writes_resumes_and_refuses_other_settings(small_campaign, tmp_path, capsys):
+    """The small campaign's files (tests/conftest.py), then the command again on a copy:
+    nothing runs again and the same report comes back; other settings are refused."""
+    serial, _, _ = small_campaign
+    files = sorted(str(p.relative_to(serial)) for p in (serial / "tasks").rglob("*.json"))
+    assert files == [f"tasks/{B.problem_name(f, 2)}/{a}.json" for f in (1, 21)
+                     for a in ("CMA_ES", "LDWPSO")]
+    doc = json.loads((serial / files[1]).read_text())
+    a = doc["algorithms"]["LDWPSO"]
+    instances = [1, 2, 3, 4, 5, *range(101, 111)]
+    assert a["evaluations"] <= 200 and len(a["final"]) == 15
+    assert a["instance_of_run"] == instances and doc["problem"]["instances"] == instances
+    assert np.asarray(a["history"]["precision"]).shape == (15, len(a["history"]["evaluations"]))
+    # precision is f - f_opt of the run's instance, COCO's f_opt
+    assert doc["problem"]["f_opt"][:2] == [79.48, 394.48]
+    np.testing.assert_allclose(a["precision"], np.asarray(a["final"]) - doc["problem"]["f_opt"],
+                               atol=1e-9)
+    for name in ("report.md", "summary.json", "ecdf_bbob_d02.png",
+                 "coco/LDWPSO/bbobexp_f21.info", "coco/CMA_ES/data_f1/bbobexp_f1_DIM2.tdat"):
+        assert (serial / name).stat().st_size > 0
+    # resume: nothing runs again, the same report comes back
     out = tmp_path / "cmp"
-    args = ["--suite", "bbob", "--functions", "1,2", "--dimensions", "2", "--algorithms",
-            "LDWPSO,PSO", "--instances", "1,2", "--budget", "100d", "--out", str(out)]
+    shutil.copytree(serial, out)
+    args = [*SMALL_CAMPAIGN[1:], "--out", str(out)]
+    stamps = {f: (out / f).stat().st_mtime_ns for f in files}
     code, text, _ = _run(args, capsys)
     assert code == 0 and "Best algorithm" in text
-    files = sorted(str(p.relative_to(out)) for p in (out / "tasks").rglob("*.json"))
-    assert files == [f"tasks/{B.problem_name(f, 2)}/{a}.json" for f in (1, 2)
-                     for a in ("LDWPSO", "PSO")]
-    doc = json.loads((out / files[0]).read_text())
-    a = doc["algorithms"]["LDWPSO"]
-    assert a["evaluations"] <= 200 and len(a["final"]) == 2
-    assert a["instance_of_run"] == [1, 2] and doc["problem"]["instances"] == [1, 2]
-    assert np.asarray(a["history"]["precision"]).shape == (2, len(a["history"]["evaluations"]))
-    # precision is f - f_opt of the run's instance, COCO's f_opt
-    assert doc["problem"]["f_opt"] == [79.48, 394.48]
-    np.testing.assert_allclose(a["precision"], np.asarray(a["final"]) - [79.48, 394.48],
-                               atol=1e-9)
-    for name in ("report.md", "summary.json", "ecdf_bbob_d02.png", "coco/PSO/bbobexp_f2.info"):
-        assert (out / name).stat().st_size > 0
-    # resume: nothing runs again, the same numbers come back
-    stamps = {f: (out / f).stat().st_mtime_ns for f in files}
-    code, text2, _ = _run(args, capsys)
-    assert code == 0 and text2.split("Wall time")[1].split("\n", 1)[1] == \
-        text.split("Wall time")[1].split("\n", 1)[1]
+    def body(path):  # between the wall time and the commands, which name --out
+        return path.read_text().split("Wall time")[1].split("\n", 1)[1].split("## Repro")[0]
+
+    assert body(out / "report.md") == body(serial / "report.md")
     assert stamps == {f: (out / f).stat().st_mtime_ns for f in files}
     # other settings in the same directory: refused, nothing touched
     code, _, err = _run([*args[:-2], "--seed", "1", "--out", str(out)], capsys)

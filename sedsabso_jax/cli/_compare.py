@@ -51,13 +51,6 @@ def run(args: argparse.Namespace) -> None:
                                 functions=args.functions, dimensions=args.dimensions,
                                 instances=args.instances, dtype=args.dtype)
     settings.check()
-    if settings.suite != "identification":
-        try:
-            import cocoex  # noqa: F401  (BBOB's functions)
-        except ImportError:
-            raise ValueError("the BBOB suite needs coco-experiment: pip install "
-                             "'sedsabso-jax[compare]' (or use --suite identification)"
-                             ) from None
     check_writable(args.out, None)
     t0 = time.perf_counter()
     with CompareProgress() as progress:

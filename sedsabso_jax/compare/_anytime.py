@@ -115,7 +115,8 @@ def reproduce(algorithms: list[str], out: str = "OUT") -> list[str]:
             "Each algorithm's runs are in COCO's format in `coco/ALGORITHM/` (what COCO's "
             "`bbob` observer writes). COCO's standard figures and tables, offline:", "",
             "```bash", f"python -m cocopp -o {out}/ppdata {folders}", "```", "",
-            "Beside archived algorithms (needs internet; `cocopp.archives.bbob` lists them, "
-            "e.g. `2009/BIPOP-CMA-ES_hansen`):", "",
-            "```bash", f"python -m cocopp -o {out}/ppdata {folders} bbob/2009/BIPOP-CMA-ES",
+            "Beside archived algorithms (needs internet; `cocopp.archives.bbob('cma')` lists "
+            "the archived data sets whose names contain `cma`; a trailing `!` takes the "
+            "first match):", "",
+            "```bash", f"python -m cocopp -o {out}/ppdata {folders} 'bbob/2009/BIPOP-CMA-ES!'",
             "```", ""]

@@ -10,22 +10,19 @@ an instance named k times gets k runs (``1-5,1-5,1-5``: the 2009 set).
 
 Dimensions: COCO's, 2, 3, 5, 10, 20 and 40 (cocopp's figures and tables show these).
 
-The functions evaluate through cocoex itself (COCO's C code, one point at a time, from a
-JAX callback) until the JAX implementation of COCO's functions lands.
+The functions are COCO's in JAX (:mod:`._coco`: cocoex's values to rounding, COCO's
+``f_opt`` exactly).
 """
 
 from __future__ import annotations
 
-import functools
-import os
 import re
-import tempfile
-import threading
 from collections.abc import Iterable
 
 import jax
-import jax.numpy as jnp
 import numpy as np
+
+from ._coco import MAX_INSTANCE, CocoArgs, coco_args, coco_optimum, coco_value
 
 #: COCO's names of f1-f24 (cocopp's ``bbob-benchmarkshortinfos.txt``), short forms
 FUNCTIONS = ("sphere", "ellipsoid", "rastrigin", "bueche-rastrigin", "linear-slope",
@@ -36,8 +33,6 @@ FUNCTIONS = ("sphere", "ellipsoid", "rastrigin", "bueche-rastrigin", "linear-slo
              "lunacek")
 DIMENSIONS = (2, 3, 5, 10, 20, 40)
 DEFAULT_INSTANCES = (1, 2, 3, 4, 5, *range(101, 111))
-#: the largest instance number accepted (COCO's seeds are function + 10000 instance)
-MAX_INSTANCE = 100000
 BOX = 5.0
 
 
@@ -91,49 +86,18 @@ def parse_name(name: str) -> tuple[int, int] | None:
     return (int(m.group(1)), int(m.group(2))) if m else None
 
 
-# ------------------------------------------------------------------ cocoex (for now)
-_LOCK = threading.Lock()
+def value(x: jax.Array, args: CocoArgs) -> jax.Array:
+    """BBOB's fitness at one point: :func:`._coco.coco_value` (the function and instance
+    in ``args``, :func:`instance_args`)."""
+    return coco_value(x, args)
 
 
-@functools.cache
-def _cocoex_problem(function: int, instance: int, dim: int):
-    import cocoex
-
-    suite = cocoex.Suite("bbob", f"instances: {instance}",
-                         f"function_indices: {function} dimensions: {dim}")
-    return suite, suite.get_problem_by_function_dimension_instance(function, dim, instance)
+def instance_args(function: int, instance: int, dim: int) -> CocoArgs:
+    """The runtime arguments of :func:`value` for one instance (the same shapes for every
+    function and instance of a dimension: one compiled fitness serves them all)."""
+    return coco_args(function, instance, dim)
 
 
-@functools.cache
 def f_opt(function: int, instance: int, dim: int) -> float:
-    """COCO's optimal value of an instance: its function at COCO's ``best_parameter``."""
-    _, problem = _cocoex_problem(function, instance, dim)
-    with _LOCK, tempfile.TemporaryDirectory() as tmp:
-        here = os.getcwd()
-        os.chdir(tmp)
-        try:
-            problem._best_parameter("print")
-            x_opt = np.loadtxt("._bbob_problem_best_parameter.txt", ndmin=1)
-        finally:
-            os.chdir(here)
-    return float(problem(x_opt))
-
-
-def _evaluate(x: np.ndarray, function: np.ndarray, instance: np.ndarray) -> np.ndarray:
-    flat = np.asarray(x, dtype=float).reshape(-1, x.shape[-1])
-    _, problem = _cocoex_problem(int(np.ravel(function)[0]), int(np.ravel(instance)[0]),
-                                 x.shape[-1])
-    return np.array([problem(row) for row in flat]).reshape(x.shape[:-1]).astype(x.dtype)
-
-
-def value(x: jax.Array, args: tuple[jax.Array, jax.Array]) -> jax.Array:
-    """BBOB function ``args[0]`` (1-24), instance ``args[1]`` (COCO's number), at ``x``."""
-    function, instance = args
-    out = jax.ShapeDtypeStruct(x.shape[:-1], x.dtype)
-    return jax.pure_callback(_evaluate, out, x, function, instance, vmap_method="broadcast_all")
-
-
-def instance_args(function: int, instance: int, dim: int) -> tuple[jax.Array, jax.Array]:
-    """The runtime arguments of :func:`value` for one instance."""
-    _cocoex_problem(function, instance, dim)
-    return jnp.int32(function), jnp.int32(instance)
+    """COCO's optimal value of an instance."""
+    return coco_optimum(function, instance, dim)[0]
