@@ -3,24 +3,27 @@ processes (``sj.compare.compare(..., workers=N)``, Dask's ``LocalCluster``), and
 process without Dask, with the same seeds: wall time and whether the numbers agree.
 
 The campaign: COCO's bbob suite, functions 1-24 in 10-D, COCO's 15 instances, LDWPSO and
-evosax's CMA-ES, ``--budget`` evaluations per run (3000d): 48 tasks of 15 runs. Each run
-of the workers starts a fresh cluster (its start and shutdown timed with it), so every
-worker compiles each (algorithm, dimension) once, as a user's campaign does; JAX's
-persistent compilation cache stays off. A warm-up campaign (1 function, 2 workers) comes
-first; then 1 and 2 workers alternate ``--repeats`` times, and the fastest of each counts
-(a shared machine only ever adds time). The numbers: every task file, timings left out,
-bit for bit equal across the three.
+evosax's CMA-ES, ``--budget`` evaluations per run (10000d): 48 tasks of 15 runs. Each run
+of the workers starts a fresh cluster (its start and shutdown timed with it) with a fresh
+compilation cache, so the workers compile each (algorithm, dimension) as a user's first
+campaign does. A warm-up campaign (1 function, 2 workers) comes first; then 1 and 2
+workers alternate ``--repeats`` times, and the fastest of each counts (a shared machine
+only ever adds time). The numbers: every task file, timings left out, bit for bit equal
+across the three. The JSON keeps the load averages before and after.
 
     python -m benchmarks.campaign [--json benchmarks/results/campaign_cpu_2core.json]
-                                  [--budget 3000d] [--repeats 2] [--quick]
+                                  [--budget 10000d] [--repeats 2] [--quick]
 
-Typical output (2-core AMD EPYC VM, shared with other jobs; about 14 minutes):
+Typical output (2-core AMD EPYC VM shared with other jobs, load average 2.3-4.8 from
+them; about 26 minutes; benchmarks/results/campaign_cpu_2core.json):
 
-    device: cpu (AMD EPYC 7B13, 2 cores), jax 0.10.2; 48 tasks
-    serial (no Dask): 171.2 s
-    1 worker:  182.9 s, 176.4 s
-    2 workers: 104.5 s, 99.8 s
-    speed-up 2 workers / 1: 1.77x (fastest of 2 each); numbers equal: serial = 1 = 2 workers
+    device: cpu (AMD EPYC, 2 cores), jax 0.10.2; 48 tasks
+    serial (no Dask): 369.1 s
+    1 worker: 306.6 s
+    2 workers: 189.7 s
+    1 worker: 333.8 s
+    2 workers: 183.6 s
+    speed-up 2 workers / 1: 1.67x (fastest of 2 each); numbers equal: serial = 1 = 2 workers
 """
 
 from __future__ import annotations
@@ -70,7 +73,7 @@ def timed(s: sj.compare.Settings, workers: int | None) -> tuple[float, dict, int
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--json", default=None)
-    parser.add_argument("--budget", default="3000d")
+    parser.add_argument("--budget", default="10000d")
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--quick", action="store_true", help="functions 1-10, 300d, once")
     args = parser.parse_args()

@@ -78,7 +78,11 @@ def report_settings(settings) -> dict:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The ``compare`` subcommand's flags (its defaults are ``compare``'s own)."""
+    from ..compare._bbob import DEFAULT_INSTANCES, DIMENSIONS, FUNCTIONS, ranges
     from ..compare._run import DEFAULT_ALGORITHMS, DEFAULT_BUDGET
+
+    functions, instances = ranges(range(1, len(FUNCTIONS) + 1)), ranges(DEFAULT_INSTANCES)
+    dimensions = ",".join(map(str, DIMENSIONS))
 
     cp = subcommand(
         sub, "compare",
@@ -98,12 +102,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     problems = cp.add_argument_group("problems")
     problems.add_argument("--suite", default="all",
                           help="bbob, identification or all (all)")
-    problems.add_argument("--functions", default="1-24",
-                          help="BBOB functions, numbers and ranges (1-24)")
-    problems.add_argument("--dimensions", default="2,3,5,10,20,40",
-                          help="BBOB dimensions, of COCO's 2,3,5,10,20,40 (all six)")
-    problems.add_argument("--instances", default="1-5,101-110",
-                          help="COCO's BBOB instance numbers, one run each (1-5,101-110: "
+    problems.add_argument("--functions", default=functions,
+                          help=f"BBOB functions, numbers and ranges ({functions})")
+    problems.add_argument("--dimensions", default=dimensions,
+                          help=f"BBOB dimensions, of COCO's {dimensions} (all)")
+    problems.add_argument("--instances", default=instances,
+                          help=f"COCO's BBOB instance numbers, one run each ({instances}: "
                           "COCO's since 2023)")
     algorithms = cp.add_argument_group("algorithms")
     algorithms.add_argument("--algorithms", default=",".join(DEFAULT_ALGORITHMS),

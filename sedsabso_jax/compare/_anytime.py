@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._output import columns_note, markdown_table
+from ._bbob import parse_name
 from ._statistics import COCO_TARGETS, average_runtime, ecdf
 
 #: the targets of cocopp's tables (``pptable_targetsOfInterest``) and its final target
@@ -41,7 +42,8 @@ def summary(docs: list[dict]) -> dict:
         for name, alg in doc["algorithms"].items():
             lengths = _lengths(alg)
             spent = np.full(len(lengths), float(alg["evaluations"]))
-            art.append({"problem": p["name"], "function": int(p["name"][6:8]), "dim": p["dim"],
+            function = (parse_name(p["name"]) or (0, 0))[0]
+            art.append({"problem": p["name"], "function": function, "dim": p["dim"],
                         "algorithm": name, "runs": len(lengths),
                         "aRT": average_runtime(lengths, spent),
                         "successes": np.isfinite(lengths).sum(axis=0)})

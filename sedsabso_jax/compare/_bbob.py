@@ -50,6 +50,18 @@ def parse_numbers(text: str | Iterable[int], what: str) -> tuple[int, ...]:
     return tuple(out)
 
 
+def ranges(numbers: Iterable[int], sep: str = ",") -> str:
+    """Numbers as ranges, :func:`parse_numbers`' input: ``(1, 2, 3, 101)`` -> ``"1-3,101"``."""
+    numbers, parts, k = list(numbers), [], 0
+    while k < len(numbers):
+        j = k
+        while j + 1 < len(numbers) and numbers[j + 1] == numbers[j] + 1:
+            j += 1
+        parts.append(f"{numbers[k]}" if j == k else f"{numbers[k]}-{numbers[j]}")
+        k = j + 1
+    return sep.join(parts)
+
+
 def check(functions: Iterable[int], dimensions: Iterable[int],
           instances: Iterable[int]) -> None:
     """ValueError naming what is unknown and what was expected."""

@@ -17,7 +17,8 @@ import time
 from collections.abc import Callable, Iterable, Iterator
 
 from .._output import PathLike, write_text
-from . import _cocodata
+from . import _bbob, _cocodata
+from . import _problems as P
 from . import _run as R
 
 #: progress(label, done, total, elapsed seconds)
@@ -73,10 +74,10 @@ def coco_entries(docs: Iterable[dict], algorithm: str) -> list[_cocodata.Entry]:
         a = doc["algorithms"].get(algorithm)
         if doc["problem"]["suite"] != "bbob" or a is None:
             continue
-        function = int(doc["problem"]["name"][6:8])
+        function, dim = _bbob.parse_name(doc["problem"]["name"]) or (0, 0)
         c = a["coco"]
         entries.append(_cocodata.Entry(
-            function, doc["problem"]["dim"], c["comment"], tuple(a["instance_of_run"]),
+            function, dim, c["comment"], tuple(a["instance_of_run"]),
             tuple(c["f_opt"]), tuple(map(tuple, c["dat"])), tuple(map(tuple, c["tdat"]))))
     return entries
 
@@ -124,7 +125,7 @@ def compare(settings: R.Settings, out_dir: PathLike, progress: ProgressFn | None
     docs = {t: load_finished(paths[t], settings, t) for t in tasks}  # bad files fail first
     todo = [t for t in tasks if docs[t] is None]
     dims = {t.dim for t in todo if t.dim is not None}
-    dims |= {R.P.load_problem(t.problem, settings.instances).dim for t in todo
+    dims |= {P.load_problem(t.problem, settings.instances).dim for t in todo
              if t.dim is None}
     R.check_dimensions(settings, dims)
     executor = _executor(workers, scheduler, scheduler_timeout) if todo else None

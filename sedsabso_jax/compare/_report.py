@@ -26,6 +26,7 @@ from .._output import (
     write_text,
 )
 from . import _anytime
+from ._bbob import ranges
 from ._statistics import ALPHA, ecdf, effect_size_label, pairwise, summary
 
 if TYPE_CHECKING:
@@ -93,10 +94,10 @@ def render(docs: list[dict], settings: dict, seconds: float | None = None,
     lines = ["# Comparison of optimisers", ""]
     device = jax.devices()[0]
     bbob = any(d["problem"]["suite"] == "bbob" for d in docs)
-    runs = (f"one seeded run per BBOB instance ({_instances(settings)}), "
-            if bbob else "") + (f"{settings['runs']} seeded runs per identification problem"
-                                 if any(d["problem"]["suite"] != "bbob" for d in docs) else "")
-    lines += [f"{len(docs)} problems, {runs.rstrip(', ')}, every algorithm; budget "
+    runs = ([f"one seeded run per BBOB instance (COCO's {_instances(settings)})"]
+            if bbob else []) + ([f"{settings['runs']} seeded runs per identification problem"]
+                                if any(d["problem"]["suite"] != "bbob" for d in docs) else [])
+    lines += [f"{len(docs)} problems; for every algorithm {', '.join(runs)}; budget "
               f"{settings['budget']} fitness evaluations (`d`: times the "
               f"dimension), seed {settings['seed']}, {settings['dtype']}, device "
               f"{device.platform}: {device.device_kind}, sedsabso-jax "
@@ -185,15 +186,7 @@ def render(docs: list[dict], settings: dict, seconds: float | None = None,
 
 def _instances(settings: dict) -> str:
     """COCO instance numbers as ranges: ``1-5, 101-110``."""
-    numbers = list(settings.get("instances", []))
-    parts, k = [], 0
-    while k < len(numbers):
-        j = k
-        while j + 1 < len(numbers) and numbers[j + 1] == numbers[j] + 1:
-            j += 1
-        parts.append(f"{numbers[k]}" if j == k else f"{numbers[k]}-{numbers[j]}")
-        k = j + 1
-    return ", ".join(parts)
+    return ranges(settings.get("instances", []), ", ")
 
 
 def ecdf_figure(docs: list[dict], title: str) -> Figure:
