@@ -2,7 +2,8 @@
 tasks run, give the serial campaign's numbers bit for bit (nothing lost, nothing counted
 twice); a restarted campaign runs only its unfinished tasks; an unreachable scheduler is
 one line and exit status 1 within 30 s with nothing written; without the flags Dask is
-not imported, and without Dask the flags name the extra to install."""
+not imported, and without Dask the flags name the extra to install (without cocopp, a
+note names it)."""
 
 from __future__ import annotations
 
@@ -127,3 +128,13 @@ def test_without_flags_no_dask_and_without_dask_the_extra(small_campaign, tmp_pa
                                        "Dask distributed: pip install "
                                        "'sedsabso-jax[compare]'\n")
     assert not out.exists()
+
+
+def test_without_cocopp_a_note_names_the_extra(small_campaign, tmp_path, capsys, monkeypatch):
+    done = tmp_path / "done"  # finished tasks: nothing runs
+    shutil.copytree(small_campaign[0] / "tasks", done / "tasks")
+    monkeypatch.setitem(sys.modules, "cocopp", None)  # an import of it fails
+    assert cli.main([*SMALL_CAMPAIGN, "--out", str(done)]) == 0
+    assert capsys.readouterr().err == ("sedsabso-jax: note: COCO's figures and tables (python "
+                                       "-m cocopp, see report.md) need cocopp: pip install "
+                                       "'sedsabso-jax[compare]'\n")

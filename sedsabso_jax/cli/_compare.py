@@ -4,7 +4,9 @@ problems, in this process or on Dask workers."""
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import os
+import sys
 import time
 from typing import TextIO
 
@@ -64,6 +66,17 @@ def run(args: argparse.Namespace) -> None:
     print(f"written: {tasks} task files in {os.path.join(args.out, 'tasks')}, "
           + (f"COCO folders in {coco}, " if settings.suite != "identification" else "")
           + ", ".join(written))
+    if settings.suite != "identification" and missing("cocopp"):
+        print("sedsabso-jax: note: COCO's figures and tables (python -m cocopp, see "
+              "report.md) need cocopp: pip install 'sedsabso-jax[compare]'", file=sys.stderr)
+
+
+def missing(module: str) -> bool:
+    """Whether ``module`` cannot be imported (found without importing it)."""
+    try:
+        return importlib.util.find_spec(module) is None
+    except (ImportError, ValueError):  # ValueError: a None placeholder in sys.modules
+        return True
 
 
 def report_settings(settings) -> dict:
