@@ -3,6 +3,7 @@ pinocchio models built from the same descriptions (never from the package's own 
 
 from __future__ import annotations
 
+import json
 import os
 import zlib
 
@@ -218,3 +219,23 @@ def random_state(rng, robot, k=None):
 def rng(request):
     # a seed per test, stable across runs
     return np.random.default_rng(zlib.crc32(request.node.nodeid.encode()))
+
+
+#: a small COCO campaign: 2 BBOB functions in 2-D, COCO's 15 instances, 2 algorithms
+SMALL_CAMPAIGN = ["compare", "--suite", "bbob", "--functions", "1,21", "--dimensions", "2",
+                  "--algorithms", "LDWPSO,CMA_ES", "--budget", "100d"]
+
+
+@pytest.fixture(scope="session")
+def small_campaign(tmp_path_factory):
+    """:data:`SMALL_CAMPAIGN` run by the command in this process: ``(its --out, the task
+    documents, summary.json)``."""
+    pytest.importorskip("cocoex")
+    pytest.importorskip("evosax")
+    from sedsabso_jax import cli
+
+    out = tmp_path_factory.mktemp("campaign") / "serial"
+    assert cli.main([*SMALL_CAMPAIGN, "--out", str(out)]) == 0
+    docs = [json.loads(p.read_text()) for p in sorted((out / "tasks").rglob("*.json"))]
+    return out, docs, json.loads((out / "summary.json").read_text())
+

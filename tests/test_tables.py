@@ -125,9 +125,12 @@ def test_a_dropped_definition_fails():
 def _compare_docs() -> list[dict]:
     rng = np.random.default_rng(0)
     docs = []
-    for name, suite, dim in (("f01_d02", "bbob", 2), ("rs010n-prior", "identification", 21)):
+    for name, suite, dim in (("bbob-f01-sphere-d02", "bbob", 2),
+                             ("rs010n-prior", "identification", 21)):
+        targets = 51 if suite == "bbob" else 2
         algs = {n: {"label": label, "precision": rng.lognormal(k, 1, 6).tolist(),
-                    "run_lengths": [[10.0, None]] * 6, "evaluations": 100}
+                    "run_lengths": [[10.0] * 3 + [None] * (targets - 3)] * 6,
+                    "evaluations": 100}
                 for k, (n, label) in enumerate((("SEDSABSO", "SEDSABSO"), ("BSO", "BSO"),
                                                 ("PSO", "evosax PSO")))}
         docs.append({"problem": {"name": name, "suite": suite, "dim": dim}, "algorithms": algs})
@@ -136,8 +139,8 @@ def _compare_docs() -> list[dict]:
 
 def test_compare_report():
     text, _ = render(_compare_docs(), {"runs": 6, "budget": "100d", "seed": 0,
-                                      "dtype": "float32", "version": "0"})
-    assert len(_tables(text)) == 3 and undefined(text) == []
+                                      "dtype": "float32", "version": "0", "instances": [1, 2]})
+    assert len(_tables(text)) == 5 and undefined(text) == []
 
 
 def _cross_validation(rng, tau, limits, n_parameters) -> CrossValidation:

@@ -31,6 +31,8 @@ SWARMS = [*FAST, "tests/test_swarms.py"]
 BASELINES = [*FAST, "tests/test_baselines.py", "tests/test_identification.py"]
 KERNELS = [*FAST, "tests/test_backends.py", "tests/test_swarms.py"]
 COMPARE = ["tests/test_compare.py"]
+COCO_FORMAT = ["tests/test_compare_coco.py"]
+CAMPAIGNS = ["tests/test_compare_campaigns.py"]
 COMPOSE = ["tests/test_composition.py"]
 PATHS = ["tests/test_solver_paths.py"]
 VALIDATIONS = ["tests/test_validations.py"]
@@ -50,10 +52,12 @@ BUGS = [
      "antenna_difference(values[2 * n:],\n"
      "                                                              values[n:2 * n])",
      "tell reads the beetles' antennae the wrong way round", PATHS, None),
-    ("compare/_problems.py", "21: (21, 1000.0 ** 2, 4.9,", "21: (21, 1000.0 ** 2, 4.8,",
-     "f22's peaks drawn from the wrong range", COMPARE, None),
-    ("compare/_problems.py", "    z = R @ x - Ry", "    z = R.T @ x - Ry",
-     "Gallagher's rotation transposed", COMPARE, None),
+    ("compare/_cocodata.py", 'return f"{evaluations} 0 {f - f_opt:+10.9e}',
+     'return f"{evaluations + 1} 0 {f - f_opt:+10.9e}',
+     "a COCO .dat/.tdat line states one evaluation too many", COCO_FORMAT, None),
+    ("compare/_cocodata.py", "        lin = linear < self.linear\n", "        lin = False\n",
+     "the observer's linear targets (multiples of 1e5, 0 below 1e-12) left out", COCO_FORMAT,
+     None),
     ("optim/_sedsabso.py", "return jnp.exp(-(f_new - f_old) / temperature) > u",
      "return jnp.exp((f_new - f_old) / temperature) > u",
      "Metropolis rule with its sign flipped", SWARMS, None),
@@ -207,6 +211,27 @@ BUGS = [
     ("identification/_auto.py", "if self.validation is None and self.candidates > 1:",
      "if self.validation is None and self.candidates > 2:", "no validation with two "
      "candidates accepted (the first fitted, unchosen)", ["tests/test_identify_cli.py"], None),
+    ("compare/_cocodata.py", "BASE_EVALUATIONS = (1, 2, 5)", "BASE_EVALUATIONS = (1, 2, 4)",
+     ".tdat lines at dim x {1, 2, 4} x 10^k evaluations", COCO_FORMAT, None),
+    ("compare/_alignment.py", "worst = worst - 1e-12 if worst >= 2e-12 else worst / 2",
+     "worst = worst", "run lengths without cocopp's 1e-12 lowering of a row's worst value",
+     COCO_FORMAT, None),
+    ("compare/_statistics.py", "return np.where(successes > 0, total / successes, np.inf)",
+     "return np.where(successes > 0, total / len(rl), np.inf)",
+     "aRT divided by all runs, not by the successful ones", COCO_FORMAT, None),
+    ("compare/_bbob.py", "DEFAULT_INSTANCES = (1, 2, 3, 4, 5, *range(101, 111))",
+     "DEFAULT_INSTANCES = (1, 2, 3, 4, 5, *range(101, 110))",
+     "14 default BBOB instances, not a COCO year's 15", COCO_FORMAT, None),
+    ("compare/_dask.py", "            yield futures[future], doc\n",
+     "            yield futures[future], doc\n            yield futures[future], doc\n",
+     "a task finished on a worker counted twice", CAMPAIGNS, None),
+    ("compare/_dask.py", "self.client.submit(R.run_task, task, settings, key=key, pure=False)",
+     "self.client.submit(R.run_task, task, __import__('dataclasses').replace(settings, seed="
+     "settings.seed + 1), key=key, pure=False)", "the workers' runs seeded differently",
+     CAMPAIGNS, None),
+    ("compare/_campaign.py", "    todo = [t for t in tasks if docs[t] is None]",
+     "    todo = list(tasks)", "a restarted campaign runs its finished tasks again",
+     CAMPAIGNS, None),
 ]
 
 

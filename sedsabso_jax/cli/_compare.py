@@ -1,9 +1,12 @@
-"""``sedsabso-jax compare``: optimisers compared on BBOB and identification problems."""
+"""``sedsabso-jax compare``: optimisers compared on COCO's BBOB suite and identification
+problems, in this process or on Dask workers."""
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import os
+import sys
 import time
 from typing import TextIO
 
@@ -12,17 +15,18 @@ from ._common import (
     add_run_options,
     check_writable,
     non_negative_int,
+    positive_float,
     positive_int,
     subcommand,
 )
 
 
 class CompareProgress(Progress):
-    """A bar per problem on a terminal; elsewhere (a log file) one line per problem with
-    the time left at the pace so far."""
+    """A bar of tasks on a terminal; elsewhere (a log file) one line per finished task
+    with the time left at the pace so far."""
 
     def __init__(self, stream: TextIO | None = None):
-        super().__init__("compare", stream, unit="problem")
+        super().__init__("compare", stream, unit="task")
 
     def __call__(self, label: str, done: int, total: int, elapsed: float = 0.0) -> None:
         from ..compare._run import estimated_seconds
@@ -39,65 +43,93 @@ class CompareProgress(Progress):
 def run(args: argparse.Namespace) -> None:
     from ..compare import _report as report
     from ..compare import _run as compare
+    from ..compare._campaign import compare as campaign
 
     def names(text: str) -> tuple[str, ...]:
         return tuple(v.strip() for v in text.split(",") if v.strip())
 
-    try:
-        dims = tuple(int(v) for v in names(args.dimensions))
-    except ValueError:
-        raise ValueError(f"--dimensions: expected comma-separated integers, e.g. 5,10,20,40, "
-                         f"got {args.dimensions!r}") from None
     settings = compare.Settings(suite=args.suite, algorithms=names(args.algorithms),
                                 runs=args.runs, budget=args.budget, seed=args.seed,
-                                instances=args.instances, dimensions=dims, dtype=args.dtype)
+                                functions=args.functions, dimensions=args.dimensions,
+                                instances=args.instances, dtype=args.dtype)
     settings.check()
-    if settings.suite != "identification":
-        try:
-            import evosax  # noqa: F401  (BBOB's functions)
-        except ImportError:
-            raise ValueError("the BBOB suite needs evosax: pip install 'sedsabso-jax[compare]' "
-                             "(or use --suite identification)") from None
     check_writable(args.out, None)
     t0 = time.perf_counter()
     with CompareProgress() as progress:
-        docs = compare.compare(settings, args.out, progress=progress)
-    written = report.write_report(docs, docs[0]["settings"], args.out,
+        docs = campaign(settings, args.out, progress=progress, workers=args.workers,
+                        scheduler=args.scheduler, scheduler_timeout=args.scheduler_timeout)
+    written = report.write_report(docs, report_settings(settings), args.out,
                                   seconds=time.perf_counter() - t0)
     print(open(written[0], encoding="utf-8").read().split("## Every problem")[0].rstrip())
-    print(f"written: {len(docs)} problem files in {os.path.join(args.out, 'problems')}, "
+    tasks = len(settings.tasks())
+    coco = os.path.join(args.out, "coco")
+    print(f"written: {tasks} task files in {os.path.join(args.out, 'tasks')}, "
+          + (f"COCO folders in {coco}, " if settings.suite != "identification" else "")
           + ", ".join(written))
+    if settings.suite != "identification" and missing("cocopp"):
+        print("sedsabso-jax: note: COCO's figures and tables (python -m cocopp, see "
+              "report.md) need cocopp: pip install 'sedsabso-jax[compare]'", file=sys.stderr)
+
+
+def missing(module: str) -> bool:
+    """Whether ``module`` cannot be imported (found without importing it)."""
+    try:
+        return importlib.util.find_spec(module) is None
+    except (ImportError, ValueError):  # ValueError: a None placeholder in sys.modules
+        return True
+
+
+def report_settings(settings) -> dict:
+    """What the report states of the settings."""
+    from .._version import __version__
+
+    return {"algorithms": list(settings.algorithms), "runs": settings.runs,
+            "budget": settings.budget, "seed": settings.seed, "dtype": settings.dtype,
+            "functions": list(settings.functions), "dimensions": list(settings.dimensions),
+            "instances": list(settings.instances), "version": __version__}
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The ``compare`` subcommand's flags (its defaults are ``compare``'s own)."""
+    from ..compare._bbob import DEFAULT_INSTANCES, DIMENSIONS, FUNCTIONS, ranges
     from ..compare._run import DEFAULT_ALGORITHMS, DEFAULT_BUDGET
+
+    functions, instances = ranges(range(1, len(FUNCTIONS) + 1)), ranges(DEFAULT_INSTANCES)
+    dimensions = ",".join(map(str, DIMENSIONS))
 
     cp = subcommand(
         sub, "compare",
-        help="compare optimisers on BBOB and identification problems, with statistics",
+        help="compare optimisers on COCO's BBOB suite and identification problems",
         description="Run algorithms (the paper's swarms and any evosax strategy) with equal "
-        "budgets in fitness evaluations, many seeded runs per problem; write report.md "
-        "(best algorithm, Mann-Whitney U with Holm correction, A12), summary.json, run-length "
-        "ECDF figures and one JSON per problem with every run's final value and history. "
-        "Finished problems in --out are not run again.",
+        "budgets in fitness evaluations: on COCO's bbob suite one run per instance, written "
+        "in COCO's format for cocopp (OUT/coco/ALGORITHM), on the identification problems "
+        "many seeded runs; write report.md (best algorithm, Mann-Whitney U with Holm "
+        "correction, A12; on BBOB aRT and runtime ECDFs as cocopp computes them), "
+        "summary.json, run-length ECDF figures and one JSON per task (an algorithm on a "
+        "problem). Finished tasks in --out are not run again. Tasks run in this process, "
+        "on --workers processes or on a Dask cluster (--scheduler).",
         examples=["sedsabso-jax compare --suite identification --runs 20",
-                  "sedsabso-jax compare --algorithms SEDSABSO,CMA_ES --dimensions 5,10 "
-                  "--out cmp"])
+                  "sedsabso-jax compare --suite bbob --algorithms SEDSABSO,CMA_ES "
+                  "--dimensions 2,5 --workers 2 --out cmp",
+                  "sedsabso-jax compare --suite bbob --scheduler tcp://10.0.0.5:8786"])
     problems = cp.add_argument_group("problems")
     problems.add_argument("--suite", default="all",
                           help="bbob, identification or all (all)")
-    problems.add_argument("--dimensions", default="5,10,20,40",
-                          help="BBOB dimensions (5,10,20,40)")
-    problems.add_argument("--instances", type=positive_int, default=5,
-                          help="BBOB instances per function; runs are spread over them (5)")
+    problems.add_argument("--functions", default=functions,
+                          help=f"BBOB functions, numbers and ranges ({functions})")
+    problems.add_argument("--dimensions", default=dimensions,
+                          help=f"BBOB dimensions, of COCO's {dimensions} (all)")
+    problems.add_argument("--instances", default=instances,
+                          help=f"COCO's BBOB instance numbers, one run each ({instances}: "
+                          "COCO's since 2023)")
     algorithms = cp.add_argument_group("algorithms")
     algorithms.add_argument("--algorithms", default=",".join(DEFAULT_ALGORITHMS),
                             help="comma-separated: SEDSABSO, BSO, LDWPSO and evosax "
                             "strategies by evosax's names, e.g. CMA_ES, PSO, "
                             f"DifferentialEvolution ({','.join(DEFAULT_ALGORITHMS)})")
     algorithms.add_argument("--runs", type=positive_int, default=100,
-                            help="seeded runs per algorithm and problem (100)")
+                            help="seeded runs per algorithm and identification problem "
+                            "(100); BBOB: one per instance")
     algorithms.add_argument("--budget", default=DEFAULT_BUDGET,
                             help="fitness evaluations per run: N, or Nd for N times the "
                             f"dimension ({DEFAULT_BUDGET})")
@@ -105,9 +137,21 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                             help="random seed (0)")
     algorithms.add_argument("--dtype", choices=("float64", "float32"), default="float64",
                             help="precision of the runs (float64)")
+    execution = cp.add_argument_group("execution")
+    where = execution.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=positive_int, default=None, metavar="N",
+                       help="run the tasks on N worker processes on this machine, a Dask "
+                       "LocalCluster (default: "
+                       "in this process)")
+    where.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                       help="send the tasks to a running Dask scheduler, e.g. "
+                       "tcp://10.0.0.5:8786 (one dask-jobqueue starts)")
+    execution.add_argument("--scheduler-timeout", type=positive_float, default=20.0,
+                           metavar="SECONDS",
+                           help="how long to try to reach the scheduler (20)")
     outputs = cp.add_argument_group("outputs")
     outputs.add_argument("--out", default="compare-results",
-                         help="directory for the report, figures and problem files "
-                         "(compare-results)")
+                         help="directory for the report, figures, task files and COCO "
+                         "folders (compare-results)")
     add_run_options(cp, config="runs = 20")
     cp.set_defaults(func=run)

@@ -1,6 +1,7 @@
 """What ``sedsabso-jax compare`` writes from the problems' documents: ``report.md`` (which
-algorithm is best where, and which differences are significant), ``summary.json`` (every
-problem's statistics) and ECDF figures of run lengths (PNG).
+algorithm is best where, which differences are significant, and on BBOB the anytime
+measures as cocopp gives them, :mod:`._anytime`), ``summary.json`` (every problem's
+statistics and the anytime measures) and ECDF figures of run lengths (PNG).
 
 The best algorithm of a problem has the lowest median final precision (ties: the lower
 mean); "significant" is a two-sided Mann-Whitney U test at 0.05 after Holm's correction
@@ -24,6 +25,8 @@ from .._output import (
     to_json,
     write_text,
 )
+from . import _anytime
+from ._bbob import ranges
 from ._statistics import ALPHA, ecdf, effect_size_label, pairwise, summary
 
 if TYPE_CHECKING:
@@ -78,8 +81,10 @@ def _group(stats: dict) -> str:
     return f"BBOB d = {stats['dim']}" if stats["suite"] == "bbob" else "identification"
 
 
-def render(docs: list[dict], settings: dict, seconds: float | None = None) -> tuple[str, dict]:
-    """``(report.md text, summary document)``."""
+def render(docs: list[dict], settings: dict, seconds: float | None = None,
+           out: str = "OUT") -> tuple[str, dict]:
+    """``(report.md text, summary document)``; ``out``: the output directory as the
+    report's commands name it."""
     algorithms = list(docs[0]["algorithms"])
     labels = {n: docs[0]["algorithms"][n]["label"] for n in algorithms}
     all_stats = [problem_statistics(d) for d in docs]
@@ -88,14 +93,18 @@ def render(docs: list[dict], settings: dict, seconds: float | None = None) -> tu
 
     lines = ["# Comparison of optimisers", ""]
     device = jax.devices()[0]
-    lines += [f"{len(docs)} problems, {settings['runs']} seeded runs per algorithm and "
-              f"problem, budget {settings['budget']} fitness evaluations (`d`: times the "
+    bbob = any(d["problem"]["suite"] == "bbob" for d in docs)
+    runs = ([f"one seeded run per BBOB instance (COCO's {_instances(settings)})"]
+            if bbob else []) + ([f"{settings['runs']} seeded runs per identification problem"]
+                                if any(d["problem"]["suite"] != "bbob" for d in docs) else [])
+    lines += [f"{len(docs)} problems; for every algorithm {', '.join(runs)}; budget "
+              f"{settings['budget']} fitness evaluations (`d`: times the "
               f"dimension), seed {settings['seed']}, {settings['dtype']}, device "
               f"{device.platform}: {device.device_kind}, sedsabso-jax "
               f"{settings['version']}." + (f" Wall time {seconds / 60:.1f} min."
                                            if seconds else ""), ""]
-    lines += ["Precision: `f - f_opt` on BBOB (evosax's instances, runs spread evenly over "
-              "them); on identification problems the excess over the exact L1 optimum in "
+    lines += ["Precision: `f - f_opt` on BBOB (COCO's functions and numbered instances); on "
+              "identification problems the excess over the exact L1 optimum in "
               "the box as a share of the torques' L1 norm, `(f - f_opt) / sum |tau|`; no "
               "unit either way. Best: lowest median final precision. Significance: "
               f"two-sided Mann-Whitney U, Holm-corrected over all pairs of a problem, "
@@ -167,8 +176,17 @@ def render(docs: list[dict], settings: dict, seconds: float | None = None) -> tu
     lines += ["Figures: `ecdf_*.png`, the share of (run, target) pairs reached against "
               "fitness evaluations / dimension (COCO's run-length ECDF); targets 1e2 .. 1e-8 "
               "on BBOB, 1 .. 1e-8 (relative) on identification.", ""]
-    summary_doc = {"settings": settings, "problems": all_stats}
+    anytime = _anytime.summary(docs)
+    lines += _anytime.markdown(anytime, labels)
+    if bbob:
+        lines += _anytime.reproduce(algorithms, out)
+    summary_doc = {"settings": settings, "problems": all_stats, "anytime": anytime}
     return "\n".join(lines), summary_doc
+
+
+def _instances(settings: dict) -> str:
+    """COCO instance numbers as ranges: ``1-5, 101-110``."""
+    return ranges(settings.get("instances", []), ", ")
 
 
 def ecdf_figure(docs: list[dict], title: str) -> Figure:
@@ -216,7 +234,7 @@ def figures(docs: list[dict]) -> dict:
 def write_report(docs: list[dict], settings: dict, out_dir: PathLike,
                  seconds: float | None = None) -> list[str]:
     """Render everything, then write report.md, summary.json and the figures."""
-    text, summary_doc = render(docs, settings, seconds)
+    text, summary_doc = render(docs, settings, seconds, os.fspath(out_dir))
     summary_text = to_json(summary_doc)
     figs = figures(docs)
     written = []

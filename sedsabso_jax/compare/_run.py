@@ -1,32 +1,26 @@
-"""``sedsabso-jax compare``: run algorithms on a suite with equal budgets in fitness
-evaluations, many seeded runs per problem in one compiled call, and keep every run's
-final value and history.
+"""``sedsabso-jax compare``'s runs: one TASK is one algorithm on one problem, a batch of
+seeded runs (all of a BBOB problem's instances) through the compiled code the process
+keeps per (algorithm, dimension); its result is one document, kept as one JSON file
+(:mod:`._campaign` runs the tasks, in this process or on Dask workers).
 
-One JSON per problem (``DIR/problems/<name>.json``) is written atomically as soon as the
-problem is done, so an interrupted comparison resumes where it stopped: a problem whose
-file holds the same settings is read back, not run again; a file with other settings is
-an error (use another ``--out``), never silently mixed in.
-
-Seeds: run ``r`` of algorithm ``a`` on a problem uses ``jax.random.key(seed)`` folded with
-the problem's and the algorithm's names (CRC-32) and the instance; the same settings give
-the same numbers.
+Seeds: the runs of algorithm ``a`` on instance ``i`` of a problem use
+``jax.random.key(seed)`` folded with the problem's and the algorithm's names (CRC-32) and
+``i`` (COCO's instance number on BBOB, 0 on the identification problems), split into the
+runs; the same settings give the same numbers wherever a task runs.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
-import os
 import re
-import time
 import zlib
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 
 import jax
 import numpy as np
 
-from .._output import PathLike, jsonable, write_text
+from .._output import jsonable
 from .._version import __version__
 from ..optim._budget import evaluation_counts, iterations_for_budget
 from ..optim._driver import minimise
@@ -34,36 +28,46 @@ from ..optim._external import Evosax, evosax_names
 from ..optim._fitness import BlackBox
 from ..optim._registry import SWARMS
 from ..optim._solver import AbstractSolver
+from . import _alignment, _bbob, _cocodata
 from . import _problems as P
-from ._statistics import run_lengths
+from ._statistics import COCO_TARGETS, run_lengths
 
-SCHEMA = "sedsabso-jax/compare/1"
+SCHEMA = "sedsabso-jax/compare-task/1"
 #: the default line-up: the paper's three swarms, evosax's PSO with evosax's own settings
 #: (a textbook PSO from a general library) and CMA-ES, BBOB's reference method.
 DEFAULT_ALGORITHMS = ("SEDSABSO", "BSO", "LDWPSO", "PSO", "CMA_ES")
-#: evaluations per run, times the dimension: ``compare --suite all --runs 100`` took 27.8 min
-#: on a quiet 2-core CPU (README, "compare")
+#: evaluations per run, times the dimension
 DEFAULT_BUDGET = "500d"
-#: BBOB targets on f - f_opt (COCO's 51 targets, 1e2 .. 1e-8); identification targets on
-#: the relative excess over the exact optimum (1 .. 1e-8).
-TARGETS = {"bbob": 10.0 ** np.linspace(2, -8, 51),
-           "identification": 10.0 ** np.linspace(0, -8, 41)}
+#: targets on the precision: COCO's 51 on BBOB (1e2 .. 1e-8, as cocopp aligns them), 41 on
+#: the relative excess over the exact optimum of the identification problems (1 .. 1e-8)
+TARGETS = {"bbob": COCO_TARGETS, "identification": 10.0 ** np.linspace(0, -8, 41)}
 #: history kept per run: the best precision at this many log-spaced evaluation counts
 CHECKPOINTS = 24
 
 
 @dataclasses.dataclass(frozen=True)
 class Settings:
-    """What a comparison runs (all of it lands in every problem file)."""
+    """What a comparison runs: the suite, the algorithms, and per task the budget and the
+    runs (all of it lands in every task file that it decides)."""
 
     suite: str = "all"
     algorithms: tuple[str, ...] = DEFAULT_ALGORITHMS
-    runs: int = 100
+    runs: int = 100  # per identification problem; BBOB: one per instance
     budget: str = DEFAULT_BUDGET  # evaluations: "N" in all, or "Nd": N times the dimension
     seed: int = 0
-    instances: int = P.BBOB_INSTANCES
-    dimensions: tuple[int, ...] = P.BBOB_DIMENSIONS
+    functions: tuple[int, ...] = tuple(range(1, len(_bbob.FUNCTIONS) + 1))
+    dimensions: tuple[int, ...] = _bbob.DIMENSIONS
+    instances: tuple[int, ...] = _bbob.DEFAULT_INSTANCES  # COCO's numbers, a run each
     dtype: str = "float64"
+
+    def __post_init__(self) -> None:  # names as given, files under the bare evosax name
+        object.__setattr__(self, "algorithms", tuple(canonical(a) for a in self.algorithms))
+        for name in ("functions", "dimensions", "instances"):
+            value = getattr(self, name)
+            if isinstance(value, str):
+                object.__setattr__(self, name, _bbob.parse_numbers(value, name))
+            elif isinstance(value, Iterable):
+                object.__setattr__(self, name, tuple(value))
 
     def evaluations(self, dim: int) -> int:
         """The budget in fitness evaluations for a problem of dimension ``dim``."""
@@ -81,20 +85,42 @@ class Settings:
             solver_for(name)
         if len(set(self.algorithms)) != len(self.algorithms):
             raise ValueError(f"an algorithm is named twice: {', '.join(self.algorithms)}")
-        for name in ("runs", "seed", "instances"):
+        for name in ("runs", "seed"):
             v = getattr(self, name)
             low = 0 if name == "seed" else 1
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
                 raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
-        if self.suite != "identification" and self.runs < self.instances:
-            raise ValueError(f"runs ({self.runs}) must be at least the number of BBOB "
-                             f"instances ({self.instances}): each instance needs a run")
         parse_budget(self.budget)
-        for d in self.dimensions:
-            if isinstance(d, bool) or not isinstance(d, (int, np.integer)) or not 2 <= d <= 100:
-                raise ValueError(f"BBOB dimensions must be integers from 2 to 100, got {d!r}")
+        for name in ("functions", "dimensions", "instances"):
+            if not isinstance(getattr(self, name), tuple):
+                raise ValueError(f"{name}: expected numbers, e.g. (1, 2, 3) or '1-3', got "
+                                 f"{getattr(self, name)!r}")
+        if self.suite != "identification":
+            _bbob.check(self.functions, self.dimensions, self.instances)
         if self.dtype not in ("float32", "float64"):
             raise ValueError(f"dtype must be float32 or float64, got {self.dtype!r}")
+
+    def tasks(self) -> list[Task]:
+        """Every (problem, algorithm) of the comparison, in run order."""
+        names = P.problem_names(self.suite, self.dimensions, self.functions)
+        return [Task(p, a) for p in names for a in self.algorithms]
+
+
+@dataclasses.dataclass(frozen=True)
+class Task:
+    """One algorithm on one problem: a batch of seeded runs, one result file."""
+
+    problem: str
+    algorithm: str
+
+    @property
+    def suite(self) -> str:
+        return "bbob" if _bbob.parse_name(self.problem) else "identification"
+
+    @property
+    def dim(self) -> int | None:
+        parsed = _bbob.parse_name(self.problem)
+        return None if parsed is None else parsed[1]
 
 
 def parse_budget(text: str | int) -> tuple[int, bool]:
@@ -105,6 +131,11 @@ def parse_budget(text: str | int) -> tuple[int, bool]:
         raise ValueError(f"budget: expected a number of fitness evaluations >= 1, in all "
                          f"(e.g. 20000) or per dimension (e.g. 1000d), got {text!r}")
     return int(m.group(1)), bool(m.group(2))
+
+
+def canonical(name: str) -> str:
+    """An algorithm's name in files and folders: ``evosax:PSO`` is ``PSO``."""
+    return name if name in SWARMS else name.removeprefix("evosax:")
 
 
 def solver_for(name: str) -> AbstractSolver:
@@ -130,6 +161,15 @@ def solver_for(name: str) -> AbstractSolver:
 def label(name: str) -> str:
     """How an algorithm is named in reports: its solver's label."""
     return solver_for(name).label
+
+
+def describe(name: str, dim: int) -> str:
+    """An algorithm and its settings in one line (the COCO files' comment)."""
+    solver = solver_for(name)
+    where = ("the paper's settings (Actuators 2022, 11(1), 2, Sec. 5.2)" if name in SWARMS
+             else "evosax's default settings")
+    return (f"{solver.label}: {solver!r} with {where}, population {solver.population(dim)} "
+            f"in {dim}-D")
 
 
 def check_dimensions(settings: Settings, dims: Iterable[int]) -> None:
@@ -165,112 +205,104 @@ def _key(settings: Settings, problem: str, algorithm: str, instance: int):
     return jax.random.fold_in(key, instance)
 
 
-def _split_runs(runs: int, n: int) -> list[int]:
-    return [runs // n + (i < runs % n) for i in range(n)]
+def _runs_per_instance(problem: P.Problem, settings: Settings) -> list[int]:
+    if problem.suite != "bbob":
+        return [settings.runs]
+    return [settings.instances.count(inst.number) for inst in problem.instances]
 
 
-def run_problem(problem: P.Problem, settings: Settings) -> dict:
-    """All algorithms on one problem: the document written to its JSON file."""
+def run_algorithm(problem: P.Problem, name: str, settings: Settings) -> dict:
+    """One algorithm's seeded runs on every instance of ``problem``: the runs' final
+    values, precisions, run lengths to the targets and histories; on BBOB also the
+    lines of COCO's ``.dat`` and ``.tdat`` files."""
     dim, budget = problem.dim, settings.evaluations(problem.dim)
     targets = TARGETS[problem.suite]
     dtype = jax.numpy.float32 if settings.dtype == "float32" else jax.numpy.float64
-    out = {}
-    for name in settings.algorithms:
-        solver = solver_for(name)
-        iterations = iterations_for_budget(solver, budget, dim)
-        counts = evaluation_counts(solver, iterations, dim)
-        grid = np.unique(np.geomspace(counts[0], counts[-1], CHECKPOINTS).round()).astype(int)
-        finals, precisions, lengths, hist = [], [], [], []
-        compile_s = run_s = 0.0
-        runs = _split_runs(settings.runs, len(problem.instances))
-        for i, (inst, n) in enumerate(zip(problem.instances, runs)):
-            if n == 0:
-                continue
-            r = minimise(inst.fitness, solver, problem.lower, problem.upper,
-                         key=_key(settings, problem.name, name, i), iterations=iterations,
-                         runs=n, dtype=dtype, batch="vmap")
-            compile_s += r.compile_s or 0.0
-            run_s += r.run_s or 0.0
-            f = np.asarray(r.f, dtype=float)
-            h = inst.precision(np.asarray(r.history_f, dtype=float))
-            finals.append(f)
-            precisions.append(inst.precision(f))
-            lengths.append(run_lengths(h, counts, targets))
-            at = np.searchsorted(counts, grid, side="right") - 1  # last iteration within
-            hist.append(np.minimum.accumulate(h, axis=-1)[:, np.maximum(at, 0)])
-        out[name] = {
-            "label": label(name), "iterations": int(iterations),
-            "evaluations": int(counts[-1]), "compile_s": compile_s, "run_s": run_s,
-            "final": np.concatenate(finals), "precision": np.concatenate(precisions),
-            "run_lengths": np.concatenate(lengths),
-            "history": {"evaluations": grid, "precision": np.concatenate(hist)},
-            "instance_of_run": np.repeat(np.arange(len(runs)), runs),
-        }
-    return {"schema": SCHEMA, "settings": _settings_doc(settings), "problem": {
-        "name": problem.name, "suite": problem.suite, "dim": dim,
-        "description": problem.description, "budget": budget,
-        "precision": problem.precision_label, "targets": targets,
-        "f_opt": [inst.f_opt for inst in problem.instances],
-        "scale": [inst.scale for inst in problem.instances]}, "algorithms": out}
+    solver = solver_for(name)
+    iterations = iterations_for_budget(solver, budget, dim)
+    counts = evaluation_counts(solver, iterations, dim)
+    grid = np.unique(np.geomspace(counts[0], counts[-1], CHECKPOINTS).round()).astype(int)
+    at = np.maximum(np.searchsorted(counts, grid, side="right") - 1, 0)  # last iteration within
+    finals, precisions, hist, lengths = [], [], [], []
+    numbers, f_opts, dat, tdat = [], [], [], []
+    compile_s = run_s = 0.0
+    for inst, n in zip(problem.instances, _runs_per_instance(problem, settings)):
+        r = minimise(inst.fitness, solver, problem.lower, problem.upper,
+                     key=_key(settings, problem.name, name, inst.number), iterations=iterations,
+                     runs=n, dtype=dtype, batch="vmap")
+        if not np.all(np.asarray(r.n_evaluations) == counts[-1]):
+            raise RuntimeError(f"{label(name)} spent {np.asarray(r.n_evaluations)} evaluations "
+                               f"on {problem.name}, not the {counts[-1]} of its iterations")
+        compile_s += r.compile_s or 0.0
+        run_s += r.run_s or 0.0
+        best = np.minimum.accumulate(np.asarray(r.history_f, dtype=float), axis=-1)
+        finals.append(np.asarray(r.f, dtype=float))
+        precisions.append(inst.precision(finals[-1]))
+        hist.append(inst.precision(best)[:, at])
+        numbers += [inst.number] * n
+        f_opts += [inst.f_opt] * n
+        if problem.suite == "bbob":
+            for run in best:
+                lines = _cocodata.run_lines(counts, run, inst.f_opt, dim)
+                dat.append(lines[0])
+                tdat.append(lines[1])
+        else:
+            lengths.append(run_lengths(inst.precision(best), counts, targets))
+    if problem.suite == "bbob":  # as cocopp reads them off the .dat lines
+        lengths = [_alignment.run_lengths(
+            [np.array([(k, _cocodata.printed_precision(f, fo)) for k, f in lines])
+             for lines, fo in zip(dat, f_opts)], targets)]
+    out = {
+        "label": label(name), "iterations": int(iterations),
+        "evaluations": int(counts[-1]), "compile_s": compile_s, "run_s": run_s,
+        "final": np.concatenate(finals), "precision": np.concatenate(precisions),
+        "run_lengths": np.concatenate(lengths),
+        "history": {"evaluations": grid, "precision": np.concatenate(hist)},
+        "instance_of_run": numbers,
+    }
+    if problem.suite == "bbob":
+        out["coco"] = {"comment": describe(name, dim), "f_opt": f_opts, "dat": dat,
+                       "tdat": tdat}
+    return out
 
 
-def _settings_doc(settings: Settings) -> dict:
-    """The settings that decide a problem's numbers (the suite does not)."""
-    doc = dataclasses.asdict(settings)
-    doc.pop("suite")
-    doc.pop("dimensions")
-    return jsonable({**doc, "version": __version__})
+def problem_doc(problem: P.Problem, settings: Settings) -> dict:
+    """The problem's part of a result document."""
+    return {"name": problem.name, "suite": problem.suite, "dim": problem.dim,
+            "description": problem.description, "budget": settings.evaluations(problem.dim),
+            "precision": problem.precision_label, "targets": TARGETS[problem.suite],
+            "f_opt": [inst.f_opt for inst in problem.instances],
+            "scale": [inst.scale for inst in problem.instances],
+            "instances": [inst.number for inst in problem.instances]}
 
 
-def problem_path(out_dir: PathLike, name: str) -> str:
-    return os.path.join(out_dir, "problems", f"{name}.json")
+def run_task(task: Task, settings: Settings) -> dict:
+    """One task's document (what its JSON file holds), computed wherever it runs."""
+    problem = P.load_problem(task.problem, settings.instances)
+    return jsonable({"schema": SCHEMA, "settings": task_settings(settings, task),
+                     "problem": problem_doc(problem, settings),
+                     "algorithms": {task.algorithm: run_algorithm(problem, task.algorithm,
+                                                                  settings)}})
 
 
-def load_finished(path: PathLike, settings: Settings) -> dict | None:
-    """A problem's document if its file exists with these settings; None if it does not
-    exist. Raises ValueError when it holds other settings or cannot be read."""
-    if not os.path.exists(path):
-        return None
-    try:
-        with open(path, encoding="utf-8") as f:
-            doc = json.load(f)
-    except (OSError, json.JSONDecodeError) as err:
-        raise ValueError(f"{path}: cannot be read as a comparison result ({err}); remove it "
-                         f"to run that problem again") from None
-    want = _settings_doc(settings)
-    if doc.get("schema") != SCHEMA or doc.get("settings") != want:
-        have = doc.get("settings", {})
-        diff = sorted(k for k in set(want) | set(have) if want.get(k) != have.get(k))
-        raise ValueError(f"{path} holds results of other settings ({', '.join(diff)}); use "
-                         f"another --out, or the settings it was run with")
+def run_problem(problem: P.Problem, settings: Settings) -> dict:
+    """Every algorithm of ``settings`` on one problem, in this process: the document of
+    its tasks merged (their ``algorithms`` side by side)."""
+    return jsonable({"schema": SCHEMA, "settings": task_settings(settings, None),
+                     "problem": problem_doc(problem, settings),
+                     "algorithms": {a: run_algorithm(problem, a, settings)
+                                    for a in settings.algorithms}})
+
+
+def task_settings(settings: Settings, task: Task | None) -> dict:
+    """The settings that decide a task's numbers (``task`` None: those of any task)."""
+    doc: dict = {"budget": settings.budget, "seed": settings.seed, "dtype": settings.dtype,
+                 "version": __version__}
+    if task is not None:
+        doc["algorithm"] = task.algorithm
+        doc.update({"instances": list(settings.instances)} if task.suite == "bbob"
+                   else {"runs": settings.runs})
     return doc
-
-
-def compare(settings: Settings, out_dir: PathLike,
-            progress: Callable[[str, int, int, float], None] | None = None) -> list[dict]:
-    """Run (or read back) every problem of the suite; returns their documents."""
-    settings.check()
-    names = P.problem_names(settings.suite, settings.dimensions)
-    paths = [problem_path(out_dir, n) for n in names]
-    docs = [load_finished(p, settings) for p in paths]  # bad files fail before any run
-    todo = [n for n, d in zip(names, docs) if d is None]
-    built = {n: P.load_problem(n, settings.instances) for n in todo}
-    check_dimensions(settings, {p.dim for p in built.values()})
-    t0 = time.perf_counter()
-    done = sum(d is not None for d in docs)
-    for k, (name, path) in enumerate(zip(names, paths)):
-        if docs[k] is not None:
-            continue
-        if progress:
-            progress(name, done, len(names), time.perf_counter() - t0)
-        docs[k] = jsonable(run_problem(built.pop(name), settings))
-        os.makedirs(os.path.dirname(path), exist_ok=True)
-        # compact: a problem holds runs x checkpoints numbers per algorithm
-        write_text(path, json.dumps(docs[k], allow_nan=False, separators=(",", ":")) + "\n")
-        done += 1
-    if progress:
-        progress("done", len(names), len(names), time.perf_counter() - t0)
-    return [d for d in docs if d is not None]  # every problem is done here
 
 
 def estimated_seconds(done: int, total: int, elapsed: float) -> float:

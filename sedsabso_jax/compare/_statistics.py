@@ -12,7 +12,10 @@ is better), as reviewers of optimisation papers expect them.
   thresholds);
 - run length: evaluations a run needs to reach a target precision, and their empirical
   cumulative distribution over (run, target) pairs (COCO's ECDF of run lengths:
-  N. Hansen et al., "COCO: performance assessment", arXiv:1605.03560).
+  N. Hansen et al., "COCO: performance assessment", arXiv:1605.03560);
+- average runtime (aRT, formerly ERT) to reach a target: the evaluations of all runs
+  until each reached it or ran out, over the number of runs that reached it (same
+  paper; Price 1997).
 """
 
 from __future__ import annotations
@@ -25,6 +28,9 @@ import scipy.stats
 from jaxtyping import ArrayLike, Float
 
 ALPHA = 0.05
+#: COCO's 51 targets on ``f - f_opt``, 1e2 .. 1e-8, five per decade: the values cocopp
+#: aligns its data on (``numpy.power(10, i / 5)``), so a target is one of its rows exactly
+COCO_TARGETS = np.power(10.0, np.arange(10, -41, -1) / 5)
 
 
 def summary(values: Float[ArrayLike, " runs"] | Sequence[float]) -> dict:
@@ -127,3 +133,22 @@ def ecdf(run_lengths_: Float[ArrayLike, "*shape"], grid: Float[ArrayLike, " g"]
     (tests/test_compare_statistics.py)."""
     r = np.asarray(run_lengths_, dtype=float).ravel()
     return np.array([np.mean(r <= g) for g in np.asarray(grid, dtype=float)])
+
+
+def average_runtime(run_lengths_: Float[ArrayLike, "runs targets"],
+                    evaluations: Float[ArrayLike, " runs"]) -> Float[np.ndarray, " targets"]:
+    """Average runtime (aRT) per target: the evaluations each run spent until it reached
+    the target, or all of its ``evaluations`` where it did not (``inf`` in
+    ``run_lengths_``), summed over the runs and divided by the number of runs that
+    reached it; ``inf`` where none did. cocopp's ``DataSet.detERT`` on the same runs."""
+    rl = np.asarray(run_lengths_, dtype=float)
+    spent = np.asarray(evaluations, dtype=float)
+    if rl.ndim != 2 or spent.shape != rl.shape[:1]:
+        raise ValueError(f"expected run lengths (runs, targets) and one evaluation count "
+                         f"per run, got {rl.shape} and {spent.shape}")
+    hit = np.isfinite(rl)
+    successes = hit.sum(axis=0)
+    total = np.where(hit, rl, 0.0).sum(axis=0) + np.where(hit, 0.0, spent[:, None]).sum(axis=0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(successes > 0, total / successes, np.inf)
+
