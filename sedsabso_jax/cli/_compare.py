@@ -10,15 +10,8 @@ import sys
 import time
 from typing import TextIO
 
-from ._common import (
-    Progress,
-    add_run_options,
-    check_writable,
-    non_negative_int,
-    positive_float,
-    positive_int,
-    subcommand,
-)
+from . import _common
+from ._common import Progress, add_run_options, check_writable, subcommand
 
 
 class CompareProgress(Progress):
@@ -127,26 +120,26 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                             help="comma-separated: SEDSABSO, BSO, LDWPSO and evosax "
                             "strategies by evosax's names, e.g. CMA_ES, PSO, "
                             f"DifferentialEvolution ({','.join(DEFAULT_ALGORITHMS)})")
-    algorithms.add_argument("--runs", type=positive_int, default=100,
+    algorithms.add_argument("--runs", type=_common.positive_int, default=100,
                             help="seeded runs per algorithm and identification problem "
                             "(100); BBOB: one per instance")
     algorithms.add_argument("--budget", default=DEFAULT_BUDGET,
                             help="fitness evaluations per run: N, or Nd for N times the "
                             f"dimension ({DEFAULT_BUDGET})")
-    algorithms.add_argument("--seed", type=non_negative_int, default=0,
+    algorithms.add_argument("--seed", type=_common.non_negative_int, default=0,
                             help="random seed (0)")
     algorithms.add_argument("--dtype", choices=("float64", "float32"), default="float64",
                             help="precision of the runs (float64)")
     execution = cp.add_argument_group("execution")
     where = execution.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=positive_int, default=None, metavar="N",
+    where.add_argument("--workers", type=_common.positive_int, default=None, metavar="N",
                        help="run the tasks on N worker processes on this machine, a Dask "
                        "LocalCluster (default: "
                        "in this process)")
     where.add_argument("--scheduler", metavar="ADDRESS", default=None,
                        help="send the tasks to a running Dask scheduler, e.g. "
                        "tcp://10.0.0.5:8786 (one dask-jobqueue starts)")
-    execution.add_argument("--scheduler-timeout", type=positive_float, default=20.0,
+    execution.add_argument("--scheduler-timeout", type=_common.positive_float, default=20.0,
                            metavar="SECONDS",
                            help="how long to try to reach the scheduler (20)")
     outputs = cp.add_argument_group("outputs")
