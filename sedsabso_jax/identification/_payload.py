@@ -59,7 +59,7 @@ from ._terms import Offset
 PAYLOAD_PARAMETERS = LINK_PARAMETERS[:10]
 #: A mass whose standard deviation exceeds this fraction of it is warned of.
 POOR_MASS = 0.1
-_INERTIA = ("XX", "YY", "ZZ", "XY", "XZ", "YZ")
+_INERTIA = PAYLOAD_PARAMETERS[:6]
 
 
 def _quantities(p):
