@@ -50,6 +50,8 @@ from .identification._identify import identify as identify
 from .identification._metrics import Metrics as Metrics
 from .identification._metrics import validation_metrics as validation_metrics
 from .identification._model import TorqueModel as TorqueModel
+from .identification._payload import Payload as Payload
+from .identification._payload import identify_payload as identify_payload
 from .identification._report import IdentificationReport as IdentificationReport
 from .identification._splits import GivenFolds as GivenFolds
 from .identification._splits import PhaseFolds as PhaseFolds
@@ -98,5 +100,5 @@ __all__ = [
     "CoupledMotorFriction", "Estimator", "OLS", "WLS", "L1", "LevenbergMarquardt", "BoxSearch",
     "PhysicallyConsistent", "validation_metrics", "Metrics", "cross_validate",
     "select_model", "choose_prior_strength", "Validation", "PhaseFolds", "SpeedSplits",
-    "RecordingFolds", "GivenFolds", "Pooled",
+    "RecordingFolds", "GivenFolds", "Pooled", "identify_payload", "Payload",
 ]

@@ -5,7 +5,8 @@ the estimators ``OLS``, ``WLS``, ``L1``, ``LevenbergMarquardt``, ``BoxSearch``,
 ``Identification``, ``IdentificationReport``, ``cross_validate``, ``select_model``,
 ``choose_prior_strength``, ``validation_metrics``, ``Metrics``, and the validations
 ``Validation``, ``PhaseFolds``, ``SpeedSplits``, ``RecordingFolds``, ``GivenFolds``,
-``Pooled``): what writing a new estimator or torque-model term needs, the command line's
+``Pooled``; ``identify_payload``, ``Payload``): what writing a new estimator or
+torque-model term needs, the command line's
 friction text (``parse_friction``), the default candidates (``candidate_models``,
 ``estimator_candidates``) and the rules between ``select_and_identify``'s options
 (``Choice``), the validation's parts and results, and how far held-out data extrapolate
@@ -33,6 +34,7 @@ from ._folds import repeat_period as repeat_period
 from ._metrics import nrms_over_limits as nrms_over_limits
 from ._model import FRICTION_CANDIDATES as FRICTION_CANDIDATES
 from ._model import candidate_models as candidate_models
+from ._payload import PAYLOAD_PARAMETERS as PAYLOAD_PARAMETERS
 from ._report import figure_torques as figure_torques
 from ._terms import FRICTION_TERMS as FRICTION_TERMS
 from ._terms import AbstractTerm as AbstractTerm
@@ -48,5 +50,5 @@ __all__ = [
     "PriorSelection", "FRICTION_CANDIDATES", "ESTIMATOR_CANDIDATES", "PRIOR_STRENGTHS",
     "estimator_candidates", "candidate_models", "Choice", "Names", "DefaultValidation",
     "nrms_over_limits", "FRICTION_TERMS", "AbstractTerm", "parse_friction", "figure_torques",
-    "extrapolation", "Extrapolation", "Splits",
+    "extrapolation", "Extrapolation", "Splits", "PAYLOAD_PARAMETERS",
 ]
