@@ -51,6 +51,7 @@ def run(out: Path, only: str | None) -> None:
     exe = str(Path(sys.executable).parent / "sedsabso-jax")
     data = out / "_data"  # converted recordings, under OUT so that paths compare
     data.mkdir(exist_ok=True)
+    (out / "_root.txt").write_text(str(ROOT))  # the checkout, masked by diff
     jobs: list[tuple[str, list[str]]] = []
     if only in (None, "identify"):
         for name, argv in identify_runs(data).items():
@@ -81,6 +82,13 @@ def _strip(obj):
     return obj
 
 
+def _unrooted(text: str, out: Path) -> str:
+    """``text`` with the snapshot's folder and the checkout it was run from masked."""
+    text = text.replace(str(out), "OUT")
+    root = out / "_root.txt"
+    return text.replace(root.read_text(), "ROOT") if root.exists() else text
+
+
 def _masked(text: str) -> list[str]:
     """The lines of ``text`` with times masked: numbers with a unit of time, and the cells
     of table columns whose header says seconds (``[s]``)."""
@@ -108,10 +116,10 @@ def diff(old: Path, new: Path) -> int:
             print(f"only in {'old' if a.exists() else 'new'}: {rel}")
             bad += 1
             continue
-        if rel.suffix in (".png", ".npz") or a.read_bytes() == b.read_bytes():
+        if rel.suffix in (".png", ".npz") or rel.name == "_root.txt" \
+                or a.read_bytes() == b.read_bytes():
             continue
-        text_a, text_b = (p.read_text().replace(str(root), "OUT")
-                          for p, root in ((a, old), (b, new)))
+        text_a, text_b = (_unrooted(p.read_text(), root) for p, root in ((a, old), (b, new)))
         if rel.suffix == ".json":
             same = _strip(json.loads(text_a)) == _strip(json.loads(text_b))
         else:
