@@ -50,6 +50,8 @@ from .identification._identify import identify as identify
 from .identification._metrics import Metrics as Metrics
 from .identification._metrics import validation_metrics as validation_metrics
 from .identification._model import TorqueModel as TorqueModel
+from .identification._payload import Payload as Payload
+from .identification._payload import identify_payload as identify_payload
 from .identification._report import IdentificationReport as IdentificationReport
 from .identification._splits import GivenFolds as GivenFolds
 from .identification._splits import PhaseFolds as PhaseFolds
@@ -59,9 +61,9 @@ from .identification._splits import SpeedSplits as SpeedSplits
 from .identification._splits import Validation as Validation
 from .identification._terms import Armature as Armature
 from .identification._terms import CoupledMotorFriction as CoupledMotorFriction
+from .identification._terms import LoadFriction as LoadFriction
 from .identification._terms import Offset as Offset
 from .identification._terms import Quadratic as Quadratic
-from .identification._terms import LoadFriction as LoadFriction
 from .identification._terms import SmoothCoulomb as SmoothCoulomb
 from .identification._terms import Stribeck as Stribeck
 from .identification._validation import choose_prior_strength as choose_prior_strength
@@ -101,5 +103,5 @@ __all__ = [
     "CoupledMotorFriction", "Estimator", "OLS", "WLS", "L1", "LevenbergMarquardt", "BoxSearch",
     "PhysicallyConsistent", "validation_metrics", "Metrics", "cross_validate",
     "select_model", "choose_prior_strength", "Validation", "PhaseFolds", "SpeedSplits",
-    "RecordingFolds", "GivenFolds", "Pooled",
+    "RecordingFolds", "GivenFolds", "Pooled", "identify_payload", "Payload",
 ]

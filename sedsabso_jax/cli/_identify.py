@@ -5,68 +5,31 @@ report is printed and written."""
 from __future__ import annotations
 
 import argparse
-import contextlib
 import math
 import os
-from contextlib import AbstractContextManager
 from typing import Any
 
 from ._common import (
-    BUILTIN_ROBOTS,
     Progress,
     add_run_options,
     check_writable,
     non_negative_int,
-    positive_float,
     positive_int,
     subcommand,
+)
+from ._loading import (
+    add_loading,
+    add_motors,
+    add_robot,
+    load_all,
+    loading,
+    transmission_of,
+    urdf_source,
 )
 
 #: ``--method``, ``--weights`` and ``--friction`` left to validation.
 AUTO = "auto"
 WEIGHTS = (AUTO, "residual", "limits", "equal")
-
-
-def _numbers(flag: str, text, n: int):
-    """A comma-separated list of ``n`` numbers given with ``flag``."""
-    if text is None:
-        return None
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        raise ValueError(f"{flag}: expected {n} comma-separated numbers, got {text!r}") from None
-    if len(values) != n:
-        raise ValueError(f"{flag}: expected {n} numbers (one per joint), got {len(values)}")
-    return values
-
-
-def _transmission(args, n: int):
-    """The motors' transmission from --gear-ratios, --coupling, --position-offsets and
-    --drive-gains, or None."""
-    from ..measurements._transmission import Transmission
-
-    ratios = _numbers("--gear-ratios", args.gear_ratios, n)
-    if ratios is None:
-        for flag, value in (("--motor-side", args.motor_side), ("--coupling", args.coupling),
-                            ("--position-offsets", args.position_offsets),
-                            ("--drive-gains", args.drive_gains)):
-            if value:
-                raise ValueError(f"{flag} needs --gear-ratios (one per joint, motor turns per "
-                                 f"joint turn)")
-        return None
-    coupling = {}
-    for spec in args.coupling or []:
-        try:
-            pair, ratio = spec.split("=")
-            motor, joint = (int(v) for v in pair.split(":"))
-            coupling[(motor, joint)] = float(ratio)
-        except ValueError:
-            raise ValueError(f"--coupling: expected MOTOR:JOINT=RATIO (numbered from 1), e.g. "
-                             f"6:5=32, got {spec!r}") from None
-    return Transmission.from_gear_ratios(
-        ratios, coupling=coupling, offset=_numbers("--position-offsets",
-                                                   args.position_offsets, n),
-        drive_gains=_numbers("--drive-gains", args.drive_gains, n))
 
 
 def _prior_strength(text: str):
@@ -80,17 +43,6 @@ def _prior_strength(text: str):
     if not (math.isfinite(value) and value >= 0):
         raise argparse.ArgumentTypeError(f"expected a number >= 0 or 'cv', got {text!r}")
     return value
-
-
-def _urdf_source(robot: str) -> AbstractContextManager[Any]:
-    """The URDF file ``--robot`` names (a built-in's shipped file), for ``--urdf-out`` to
-    update; None (a new URDF is written) for the RS010N and the Panda, which have none."""
-    from ..dynamics import _robots as robots
-
-    shipped = {"kuka_lwr4": robots.kuka_lwr4_urdf, "staubli_tx40": robots.staubli_tx40_urdf}
-    if robot in shipped:
-        return shipped[robot]()
-    return contextlib.nullcontext(robot if robot.lower().endswith(".urdf") else None)
 
 
 def _choice(args: argparse.Namespace, physical: bool | None, candidates: int) -> Any:
@@ -124,7 +76,6 @@ def run(args: argparse.Namespace) -> None:
     from ..identification._identify import recordings_of
     from ..identification._model import FRICTION_CANDIDATES, candidate_models
     from ..identification._terms import parse_friction
-    from ..measurements._load import load_measurements
 
     check_writable(args.out, args.json, args.urdf_out)
     if args.urdf_out is not None and args.physical is False:
@@ -138,22 +89,17 @@ def run(args: argparse.Namespace) -> None:
                                       args.weights, runs=args.runs,
                                       iterations=args.iterations, seed=args.seed)
     choice = _choice(args, physical, len(frictions) * len(estimators))
-    urdf_source = _urdf_source(args.robot)
-    with urdf_source as source:
+    with urdf_source(args.robot) as source:
         if (args.urdf_out is not None and source is not None
                 and os.path.realpath(args.urdf_out) == os.path.realpath(source)):
             raise ValueError(f"--urdf-out {args.urdf_out} is the input URDF: write the "
                              f"identified robot to another file")
     robot = robots.load(args.robot, args.tip)
-    load = dict(n_joints=robot.n_joints, cutoff_hz=args.cutoff_hz,
-                filter_torques=args.filter_torques, downsample=args.downsample,
-                resample_hz=args.resample_hz, trim_edges=not args.keep_edges)
-    transmission = _transmission(args, robot.n_joints)
-    data = [load_measurements(path, **load) for path in args.data]
-    held_out = load_measurements(args.validate, **load) if args.validate else None
-    if args.motor_side:
-        data = [transmission.to_joint_side(d) for d in data]
-        held_out = None if held_out is None else transmission.to_joint_side(held_out)
+    load = loading(args, robot.n_joints)
+    transmission = transmission_of(args, robot.n_joints)
+    data = load_all(args.data, load, args.motor_side, transmission)
+    held_out = (load_all([args.validate], load, args.motor_side, transmission)[0]
+                if args.validate else None)
     data = recordings_of(robot, data)  # one rate and the robot's joints, or exit 2 now
     limits = joint_limits(args.robot, robot).torque_limits
     if limits is None and all(e.needs_limits for e in estimators):
@@ -172,7 +118,7 @@ def run(args: argparse.Namespace) -> None:
                 "validate": None if args.validate is None else os.path.abspath(args.validate),
                 "torque_limits": limits, "loading": {**load, "data_info": report.data.info},
                 "motor_side": bool(args.motor_side)}
-    with _urdf_source(args.robot) as source:
+    with urdf_source(args.robot) as source:
         written = report.write(settings, args.out, args.json, args.urdf_out,
                                urdf_source=source)
     print(report.text())
@@ -198,38 +144,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                   "run2.npz",
                   "sedsabso-jax identify --config identify.toml --physical --out results"])
     inp = ip.add_argument_group("input", "the robot, its data, and how the data are loaded")
-    inp.add_argument("--robot", metavar="NAME|URDF", required=True,
-                     help=f"one of {', '.join(BUILTIN_ROBOTS)} or a .urdf file")
-    inp.add_argument("--tip", metavar="LINK", default=None,
-                     help="URDF tip link, for trees that branch")
+    add_robot(inp)
     inp.add_argument("--data", metavar="FILE", required=True, nargs="+",
                      help="identification data (.npz or .csv); several files (one robot, one "
                      "sampling rate) are fitted together")
-    inp.add_argument("--cutoff-hz", metavar="HZ", type=positive_float, default=None,
-                     help="low-pass cutoff where velocities/accelerations are derived or "
-                     "torques filtered (default 10 Hz)")
-    inp.add_argument("--filter-torques", action="store_true", help="low-pass the torques")
-    inp.add_argument("--downsample", metavar="K", type=positive_int, default=1,
-                     help="keep every k-th sample after filtering (1)")
-    inp.add_argument("--resample-hz", metavar="HZ", type=positive_float, default=None,
-                     help="interpolate onto a uniform grid at this rate first (irregular "
-                     "logs)")
-    inp.add_argument("--keep-edges", action="store_true",
-                     help="keep the first and last 2 / cutoff seconds, where derived "
-                     "signals show the filter's edge transients (dropped by default)")
-    motors = ip.add_argument_group("motors", "data recorded on the motor side")
-    motors.add_argument("--motor-side", action="store_true",
-                        help="--data and --validate hold motor angles and motor torques (or "
-                        "currents, with --drive-gains): converted with --gear-ratios")
-    motors.add_argument("--gear-ratios", metavar="LIST", default=None,
-                        help="motor turns per joint turn, one per joint, comma-separated")
-    motors.add_argument("--coupling", action="append", default=None, metavar="M:J=RATIO",
-                        help="motor M also turns with joint J at RATIO (repeatable), e.g. "
-                        "6:5=32")
-    motors.add_argument("--position-offsets", metavar="LIST", default=None,
-                        help="joint position of each encoder zero [rad], comma-separated")
-    motors.add_argument("--drive-gains", metavar="LIST", default=None,
-                        help="motor torque per unit of recorded current, one per motor")
+    add_loading(inp)
+    add_motors(ip, "--data and --validate")
     model = ip.add_argument_group("torque model")
     model.add_argument("--friction", metavar="TERMS", default=AUTO,
                        help=f"terms of {', '.join(FRICTION_TERMS)} joined by +; auto "

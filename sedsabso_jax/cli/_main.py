@@ -3,6 +3,8 @@
 * ``sedsabso-jax reproduce``: the paper's experiment end to end (tables, figures, JSON);
 * ``sedsabso-jax identify --robot ... --data ...``: identify a robot from measured data
   (:mod:`._identify`: one call of the library's ``select_and_identify``);
+* ``sedsabso-jax identify-payload --robot ... --loaded ... --link ...``: a payload's
+  inertial parameters (:mod:`._payload`: one call of the library's ``identify_payload``);
 * ``sedsabso-jax compare``: optimisers compared on BBOB and identification problems
   (:mod:`._compare`);
 * ``sedsabso-jax base-parameters --robot PATH.urdf``: a robot's base-parameter table
@@ -28,6 +30,7 @@ from . import _base_parameters as base_parameters_command
 from . import _compare as compare_command
 from . import _config as config
 from . import _identify as identify_command
+from . import _payload as payload_command
 from ._common import (
     EXIT_STATUS,
     HelpFormatter,
@@ -121,6 +124,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_reproduce(sub)
     compare_command.add_parser(sub)
     identify_command.add_parser(sub)
+    payload_command.add_parser(sub)
     return parser
 
 
@@ -173,7 +177,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
-    if args.command in ("reproduce", "identify", "compare"):
+    if args.command in ("reproduce", "identify", "identify-payload", "compare"):
         _enable_compilation_cache()
     try:
         with warnings.catch_warnings():

@@ -18,12 +18,13 @@ from ._regressor import unchecked_regressor as unchecked_regressor
 from ._robot import LINK_PARAMETERS as LINK_PARAMETERS
 from ._robot import N_LINK_PARAMETERS as N_LINK_PARAMETERS
 from ._urdf import URDFError as URDFError
+from ._urdf import fixed_link_pose as fixed_link_pose
 from ._urdf_writer import to_urdf as to_urdf
 from ._urdf_writer import update_urdf as update_urdf
 
 __all__ = [
     "URDFError", "unchecked_regressor", "chunk_size", "random_states", "joint_limits",
     "pseudo_inertia", "from_pseudo_inertia", "params_from_com", "to_urdf", "update_urdf",
-    "link_poses",
+    "link_poses", "fixed_link_pose",
     "LINK_PARAMETERS", "N_LINK_PARAMETERS",
 ]

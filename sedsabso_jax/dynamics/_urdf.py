@@ -248,3 +248,27 @@ def joint_limit_rows(path: PathLike, joint_names: Sequence[str]) -> Float[np.nda
             float(effort) if effort else np.nan,
         ))
     return np.array(rows, dtype=float).reshape(len(rows), 4)
+
+
+def fixed_link_pose(path: PathLike, link: str, moving_links: Sequence[str]
+                    ) -> tuple[str, Float[np.ndarray, "4 4"]]:
+    """Where a URDF link sits on the chain: ``(moving link, T)`` with ``moving_links``
+    the chain's (a :class:`Robot`'s ``link_names``) and ``T`` the pose of ``link``'s
+    frame in that moving link's frame. A moving link is itself (``T`` the identity); a
+    link fixed to one (a flange, ``tool0``), or hanging on a joint off the chain (locked
+    at 0, as :func:`from_urdf` carries it), is the moving link it merges into. A
+    ValueError names a link the URDF lacks or one fixed to the base."""
+    path = os.fspath(path)
+    model = _parse(read_checked(path), path)
+    parent_joint = {j.child: j for j in model.joints}
+    if link not in {x.name for x in model.links}:
+        raise URDFError(f"URDF {path!r} has no link {link!r}; links: "
+                        f"{sorted(x.name for x in model.links)}")
+    T, at = np.eye(4), link
+    while at not in moving_links:
+        if at not in parent_joint:
+            raise URDFError(f"link {link!r} of URDF {path!r} is fixed to the base (no moving "
+                            f"link carries it); moving links: {list(moving_links)}")
+        T = _origin(parent_joint[at]) @ T
+        at = parent_joint[at].parent
+    return at, T

@@ -6,7 +6,8 @@ the estimators ``OLS``, ``WLS``, ``L1``, ``LevenbergMarquardt``, ``BoxSearch``,
 ``Identification``, ``IdentificationReport``, ``cross_validate``, ``select_model``,
 ``choose_prior_strength``, ``validation_metrics``, ``Metrics``, and the validations
 ``Validation``, ``PhaseFolds``, ``SpeedSplits``, ``RecordingFolds``, ``GivenFolds``,
-``Pooled``): what writing a new estimator or torque-model term needs, the command line's
+``Pooled``; ``identify_payload``, ``Payload``): what writing a new estimator or
+torque-model term needs, the command line's
 friction text (``parse_friction``), the default candidates (``candidate_models``,
 ``estimator_candidates``) and the rules between ``select_and_identify``'s options
 (``Choice``), the validation's parts and results, and how far held-out data extrapolate
@@ -34,13 +35,14 @@ from ._folds import repeat_period as repeat_period
 from ._metrics import nrms_over_limits as nrms_over_limits
 from ._model import FRICTION_CANDIDATES as FRICTION_CANDIDATES
 from ._model import candidate_models as candidate_models
+from ._payload import PAYLOAD_PARAMETERS as PAYLOAD_PARAMETERS
 from ._report import figure_torques as figure_torques
-from ._terms import FRICTION_TERMS as FRICTION_TERMS
 from ._shapes import LOAD_RTOL as LOAD_RTOL
 from ._shapes import Fitted as Fitted
 from ._term_base import AbstractTerm as AbstractTerm
 from ._term_base import Shapes as Shapes
 from ._term_base import Signals as Signals
+from ._terms import FRICTION_TERMS as FRICTION_TERMS
 from ._terms import parse_friction as parse_friction
 from ._validation import ESTIMATOR_CANDIDATES as ESTIMATOR_CANDIDATES
 from ._validation import PRIOR_STRENGTHS as PRIOR_STRENGTHS
@@ -52,7 +54,7 @@ __all__ = [
     "CrossValidation", "phase_folds", "repeat_period", "DEFAULT_FOLDS", "Selection",
     "PriorSelection", "FRICTION_CANDIDATES", "ESTIMATOR_CANDIDATES", "PRIOR_STRENGTHS",
     "estimator_candidates", "candidate_models", "Choice", "Names", "DefaultValidation",
-    "nrms_over_limits", "FRICTION_TERMS", "AbstractTerm", "Signals", "Shapes", "Fitted", "LOAD_RTOL",
-    "parse_friction", "figure_torques",
-    "extrapolation", "Extrapolation", "Splits",
+    "nrms_over_limits", "FRICTION_TERMS", "AbstractTerm", "Signals", "Shapes", "Fitted",
+    "LOAD_RTOL", "parse_friction", "figure_torques", "extrapolation", "Extrapolation",
+    "Splits", "PAYLOAD_PARAMETERS",
 ]
