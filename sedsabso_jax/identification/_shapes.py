@@ -34,7 +34,7 @@ from ._model import TorqueModel
 
 #: The fixed point of load-dependent friction stops when the rigid-body torque changes by
 #: less than this fraction of its largest value, or after :data:`LOAD_ITERATIONS` fits.
-LOAD_RTOL, LOAD_ITERATIONS = 1e-6, 30
+LOAD_RTOL, LOAD_ITERATIONS = 1e-5, 30
 #: A fitted velocity scale within this factor of a bound counts as on it.
 AT_BOUND = 1.02
 
