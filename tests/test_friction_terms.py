@@ -13,6 +13,7 @@ import pytest
 import sedsabso_jax as sj
 from sedsabso_jax.dynamics import N_LINK_PARAMETERS
 from sedsabso_jax.identification import parse_friction
+from sedsabso_jax.identification._shapes import _std
 
 
 def motion(n, T=4000, rate=100.0, seed=0):
@@ -45,7 +46,11 @@ def rs010n():
 
 
 def test_stribeck_and_load_columns_are_their_closed_forms(rs010n):
-    robot, base = rs010n
+    robot, _ = rs010n
+    params = np.asarray(robot.params).reshape(-1, N_LINK_PARAMETERS).copy()
+    params[:, 10:] = (1.5, 0.7)  # a prior with friction: the load must leave it out
+    robot = eqx.tree_at(lambda r: r.params, robot, params.reshape(-1))
+    base = sj.base_parameters(robot)
     q, qd, qdd, _ = motion(3, T=50)
     model = sj.TorqueModel.of(robot, (sj.SmoothCoulomb(0.05), sj.Stribeck((0.1, 0.2, 0.3)),
                                       sj.LoadFriction(viscous=True)), base=base)
@@ -141,8 +146,10 @@ def test_a_scale_the_data_cannot_see_is_reported(rs010n):
 
 
 def test_a_model_that_is_not_linear_is_validated_split_by_split(rs010n):
-    """Cross-validation refits the load's fixed point on each split's training samples:
-    on a plant with load friction the load model predicts better than the linear one."""
+    """Cross-validation refits a model that is not linear on each split's training
+    samples: on a plant with load friction the load model predicts better than the linear
+    one; on a Stribeck plant, fitted Stribeck scales from a poor start (0.5 rad/s) better
+    than the same scales fixed."""
     robot, base = rs010n
     k = np.array([0.1, 0.15, 0.1])
     data = simulated(robot, lambda load, qd: k * np.abs(load) * np.sign(qd), seed=4)
@@ -151,6 +158,25 @@ def test_a_model_that_is_not_linear_is_validated_split_by_split(rs010n):
                                sj.TorqueModel.of(robot, (sj.LoadFriction(),), base=base))
     assert loaded.score < 0.8 * linear.score
     assert len(loaded.fold_scores) == len(linear.fold_scores)
+    vs = np.array([0.08, 0.15, 0.25])
+    data = simulated(robot, lambda load, qd: 2.0 * np.exp(-(qd / vs) ** 2) * np.sign(qd),
+                     seed=6, noise=0.001)
+    fixed, fitted = (sj.cross_validate(robot, data, sj.OLS(), sj.TorqueModel.of(
+        robot, (sj.Stribeck(0.5, fitted=f),), base=base)) for f in (False, True))
+    assert fitted.score < 0.9 * fixed.score
+
+
+def test_std_of_a_direction_the_rows_do_not_determine():
+    """The scales' standard deviations: sqrt(s2 diag((J^T J)^-1)) where the columns are
+    independent; inf for a zero column and for both columns of a dependent pair."""
+    rng = np.random.default_rng(0)
+    J = rng.standard_normal((50, 3))
+    np.testing.assert_allclose(_std(J, 2.0), np.sqrt(2.0 * np.diag(np.linalg.inv(J.T @ J))),
+                               rtol=1e-10)
+    J[:, 1] = 0.0
+    assert np.isinf(_std(J, 2.0)[1]) and np.isfinite(_std(J, 2.0)[[0, 2]]).all()
+    J[:, 1] = 3.0 * J[:, 0]
+    assert np.isinf(_std(J, 2.0)[:2]).all() and np.isfinite(_std(J, 2.0)[2])
 
 
 def test_the_command_fits_and_reports_them(tmp_path, rs010n):
