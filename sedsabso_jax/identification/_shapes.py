@@ -33,8 +33,11 @@ from ._fitting import Estimator, EstimatorFit, FitProblem
 from ._model import TorqueModel
 
 #: The fixed point of load-dependent friction stops when the rigid-body torque changes by
-#: less than this fraction of its largest value, or after :data:`LOAD_ITERATIONS` fits.
-LOAD_RTOL, LOAD_ITERATIONS = 1e-5, 30
+#: less than this fraction of its largest value (the conic solver's own precision: a
+#: physically consistent fit jitters at about 1e-6), or after :data:`LOAD_ITERATIONS`.
+LOAD_RTOL = 1e-5
+#: The most fits of the load's fixed point.
+LOAD_ITERATIONS = 30
 #: A fitted velocity scale within this factor of a bound counts as on it.
 AT_BOUND = 1.02
 
