@@ -61,9 +61,11 @@ from .identification._splits import SpeedSplits as SpeedSplits
 from .identification._splits import Validation as Validation
 from .identification._terms import Armature as Armature
 from .identification._terms import CoupledMotorFriction as CoupledMotorFriction
+from .identification._terms import LoadFriction as LoadFriction
 from .identification._terms import Offset as Offset
 from .identification._terms import Quadratic as Quadratic
 from .identification._terms import SmoothCoulomb as SmoothCoulomb
+from .identification._terms import Stribeck as Stribeck
 from .identification._validation import choose_prior_strength as choose_prior_strength
 from .identification._validation import cross_validate as cross_validate
 from .identification._validation import select_model as select_model
@@ -96,7 +98,8 @@ __all__ = [
     "minimise", "AbstractSolver", "SEDSABSO", "BSO", "LDWPSO", "Evosax", "BlackBox",
     "L1Residual", "Result", "box_around", "iterations_for_budget", "evaluation_counts",
     "identify", "Identification", "select_and_identify", "IdentificationReport",
-    "TorqueModel", "Offset", "Quadratic", "SmoothCoulomb", "Armature",
+    "TorqueModel", "Offset", "Quadratic", "SmoothCoulomb", "Stribeck", "LoadFriction",
+    "Armature",
     "CoupledMotorFriction", "Estimator", "OLS", "WLS", "L1", "LevenbergMarquardt", "BoxSearch",
     "PhysicallyConsistent", "validation_metrics", "Metrics", "cross_validate",
     "select_model", "choose_prior_strength", "Validation", "PhaseFolds", "SpeedSplits",

@@ -502,7 +502,8 @@ def test_terms_columns_are_their_closed_forms(rs010n, rng):
     K = np.array([[2.0, 0.0, 0.0], [0.0, 3.0, 0.0], [0.0, 0.5, 4.0]])  # motor 3 turns 2 and 3
     terms = (SmoothCoulomb(0.1), CoupledMotorFriction(), Armature(), Quadratic(), Offset())
     model = TorqueModel.of(robot, terms, transmission=K, base=base)
-    assert model.friction == "viscous-coulomb+offset+quadratic+smooth+armature+coupling"
+    assert model.friction == "viscous-coulomb+offset+quadratic+smooth:0.1+armature+coupling"
+    assert parse_friction(model.friction) == model.terms  # the text reads back
     assert model.terms == (Offset(), Quadratic(), SmoothCoulomb(0.1), Armature(),
                            CoupledMotorFriction())  # column order, whatever the order given
     q, qd, qdd = states(rng, 3, T=40)
@@ -556,14 +557,24 @@ def test_parse_friction_reads_the_command_lines_text():
     assert parse_friction("coupling+armature") == (Armature(), CoupledMotorFriction())
     for text, match in [("viscous-coulomb+glue", r"^unknown friction term\(s\) \['glue'\]; "
                          r"known: \('viscous-coulomb', 'offset', 'quadratic', 'smooth', "
-                         r"'armature', 'coupling'\) \(joined by '\+', e\.g\. "
-                         r"'viscous-coulomb\+offset'\)$"),
+                         r"'armature', 'coupling', 'stribeck', 'load'\) \(joined by '\+', "
+                         r"e\.g\. 'viscous-coulomb\+offset'\)$"),
+                        ("offset:2", r"^friction term 'offset' takes no option, got offset:2$"),
+                        ("smooth:fast", r"^friction term 'smooth': expected smooth:fit or "
+                                        r"smooth:VELOCITY"),
+                        ("load:quadratic", r"^friction term 'load': expected load or "
+                                           r"load:viscous, got load:quadratic$"),
+                        ("smooth:-1", r"SmoothCoulomb's velocity must be a number > 0"),
                         ("", "^friction must be a string of terms joined by '\\+'"),
                         (None, "^friction must be a string")]:
         with pytest.raises(ValueError, match=match):
             parse_friction(text)
     assert sj.identification.FRICTION_TERMS == ("viscous-coulomb", "offset", "quadratic",
-                                                "smooth", "armature", "coupling")
+                                                "smooth", "armature", "coupling", "stribeck",
+                                                "load")
+    assert parse_friction("smooth:fit+stribeck:0.05+load:viscous") == (
+        SmoothCoulomb(fitted=True), sj.Stribeck(0.05), sj.LoadFriction(viscous=True))
+    assert parse_friction("smooth:0.1,0.2,0.3") == (SmoothCoulomb((0.1, 0.2, 0.3)),)
 
 
 def test_candidate_models(rs010n):

@@ -35,6 +35,7 @@ COCO_FORMAT = ["tests/test_compare_coco.py"]
 CAMPAIGNS = ["tests/test_compare_campaigns.py"]
 COMPOSE = ["tests/test_composition.py"]
 PATHS = ["tests/test_solver_paths.py"]
+FRICTION = ["tests/test_friction_terms.py"]
 VALIDATIONS = ["tests/test_validations.py"]
 IDENTIFICATION = ["tests/test_identification.py"]
 
@@ -194,13 +195,13 @@ BUGS = [
     ("identification/_identify.py", "if max(rates) > (1 + RATE_TOLERANCE) * min(rates):",
      "if max(rates) > 2 * (1 + RATE_TOLERANCE) * min(rates):",
      "recordings at twice the rate of another accepted", VALIDATIONS, None),
-    ("identification/_terms.py", "        u = np.sign(u)\n", "        u = -np.sign(u)\n",
+    ("identification/_term_base.py", "        u = np.sign(u)\n", "        u = -np.sign(u)\n",
      "the coupled motor's Coulomb column with its sign flipped", IDENTIFICATION, None),
     ("identification/_terms.py", 'return tuple(f"{self.prefix}{j + 1}" for j',
      'return tuple(f"{self.prefix}{j}" for j', "a joint friction term's names numbered "
      "from 0", IDENTIFICATION, None),
-    ("identification/_terms.py", "key=lambda t: list(_TERMS).index(t.name)))",
-     "key=lambda t: -list(_TERMS).index(t.name)))", "the terms' columns in reverse order",
+    ("identification/_terms.py", "key=lambda t: list(TERMS).index(t.name)))",
+     "key=lambda t: -list(TERMS).index(t.name)))", "the terms' columns in reverse order",
      IDENTIFICATION, None),
     ("identification/_box_search.py", "(x - lower <= margin) | (upper - x <= margin)",
      "(x - lower <= margin) & (upper - x <= margin)", "a parameter on a face of the box "
@@ -232,6 +233,25 @@ BUGS = [
     ("compare/_campaign.py", "    todo = [t for t in tasks if docs[t] is None]",
      "    todo = list(tasks)", "a restarted campaign runs its finished tasks again",
      CAMPAIGNS, None),
+    ("identification/_terms.py", "np.exp(-(s.qd / v) ** 2) * s.coulomb",
+     "np.exp(-(s.qd / v)) * s.coulomb", "Stribeck's curve without the square",
+     FRICTION, None),
+    ("identification/_terms.py", "        load = np.abs(s.load)\n", "        load = s.load\n",
+     "friction growing with the signed, not the absolute, load", FRICTION, None),
+    ("identification/_model.py",
+     "            load = Y[..., rigid] @ np.asarray(self.load_values)[rigid]",
+     "            load = Y[..., :self.base.rank] @ np.asarray(self.load_values)",
+     "the load torque with the friction columns in it", FRICTION, None),
+    ("identification/_shapes.py", "        load, model = new, model.linearized_at(out.x)",
+     "        load = new", "the load's fixed point never moves its load point", FRICTION, None),
+    ("identification/_shapes.py", "    return model.with_shapes(np.exp(best.x))",
+     "    return model", "the searched velocity scales never applied", FRICTION, None),
+    ("identification/_shapes.py",
+     "    return np.where(free | (norms == 0), np.inf, np.sqrt(var))",
+     "    return np.sqrt(var)", "undetermined scales reported with a finite std", FRICTION, None),
+    ("identification/_folds.py", "        problems = None if rows.model.nonlinear else",
+     "        problems = None if False else", "a model that is not linear validated with "
+     "its full-data load point and scales", FRICTION, None),
 ]
 
 

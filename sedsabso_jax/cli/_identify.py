@@ -129,7 +129,8 @@ def run(args: argparse.Namespace) -> None:
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The ``identify`` subcommand's flags, in groups."""
     from ..identification._fitting import Estimator
-    from ..identification._terms import FRICTION_TERMS
+    from ..identification._model import FRICTION_CANDIDATES
+    from ..identification._terms import FRICTION_TERMS, friction_text
     from ..identification._validation import PRIOR_STRENGTHS
 
     ip = subcommand(
@@ -151,10 +152,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     add_loading(inp)
     add_motors(ip, "--data and --validate")
     model = ip.add_argument_group("torque model")
+    candidates = ", ".join(friction_text(terms) for terms in FRICTION_CANDIDATES)
     model.add_argument("--friction", metavar="TERMS", default=AUTO,
-                       help=f"terms of {', '.join(FRICTION_TERMS)} joined by +; auto "
-                       "(default): chosen by validation among viscous-coulomb, "
-                       "+offset, +offset+armature, +offset+quadratic+smooth")
+                       help=f"terms of {', '.join(FRICTION_TERMS)} joined by +, each "
+                       "TERM or TERM:OPTION (smooth:fit and stribeck:fit search each "
+                       "joint's velocity scale, smooth:0.05 and stribeck:0.1 fix it, "
+                       "load:viscous adds viscous friction growing with the load); auto "
+                       f"(default): chosen by validation among {candidates}")
     est = ip.add_argument_group("estimator")
     est.add_argument("--method", choices=(AUTO, *Estimator.registered()), default=AUTO,
                      help="estimator; auto (default): OLS or WLS, chosen by validation")

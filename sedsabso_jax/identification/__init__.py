@@ -1,7 +1,8 @@
 """Identification beyond the package root's names (``identify``, ``select_and_identify``,
 the estimators ``OLS``, ``WLS``, ``L1``, ``LevenbergMarquardt``, ``BoxSearch``,
 ``PhysicallyConsistent`` and their base ``Estimator``, ``TorqueModel`` and its terms
-``Offset``, ``Quadratic``, ``SmoothCoulomb``, ``Armature``, ``CoupledMotorFriction``,
+``Offset``, ``Quadratic``, ``SmoothCoulomb``, ``Stribeck``, ``LoadFriction``, ``Armature``,
+``CoupledMotorFriction``,
 ``Identification``, ``IdentificationReport``, ``cross_validate``, ``select_model``,
 ``choose_prior_strength``, ``validation_metrics``, ``Metrics``, and the validations
 ``Validation``, ``PhaseFolds``, ``SpeedSplits``, ``RecordingFolds``, ``GivenFolds``,
@@ -36,8 +37,12 @@ from ._model import FRICTION_CANDIDATES as FRICTION_CANDIDATES
 from ._model import candidate_models as candidate_models
 from ._payload import PAYLOAD_PARAMETERS as PAYLOAD_PARAMETERS
 from ._report import figure_torques as figure_torques
+from ._shapes import LOAD_RTOL as LOAD_RTOL
+from ._shapes import Fitted as Fitted
+from ._term_base import AbstractTerm as AbstractTerm
+from ._term_base import Shapes as Shapes
+from ._term_base import Signals as Signals
 from ._terms import FRICTION_TERMS as FRICTION_TERMS
-from ._terms import AbstractTerm as AbstractTerm
 from ._terms import parse_friction as parse_friction
 from ._validation import ESTIMATOR_CANDIDATES as ESTIMATOR_CANDIDATES
 from ._validation import PRIOR_STRENGTHS as PRIOR_STRENGTHS
@@ -49,6 +54,7 @@ __all__ = [
     "CrossValidation", "phase_folds", "repeat_period", "DEFAULT_FOLDS", "Selection",
     "PriorSelection", "FRICTION_CANDIDATES", "ESTIMATOR_CANDIDATES", "PRIOR_STRENGTHS",
     "estimator_candidates", "candidate_models", "Choice", "Names", "DefaultValidation",
-    "nrms_over_limits", "FRICTION_TERMS", "AbstractTerm", "parse_friction", "figure_torques",
-    "extrapolation", "Extrapolation", "Splits", "PAYLOAD_PARAMETERS",
+    "nrms_over_limits", "FRICTION_TERMS", "AbstractTerm", "Signals", "Shapes", "Fitted",
+    "LOAD_RTOL", "parse_friction", "figure_torques", "extrapolation", "Extrapolation",
+    "Splits", "PAYLOAD_PARAMETERS",
 ]

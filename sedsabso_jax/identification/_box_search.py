@@ -109,6 +109,7 @@ class BoxSearch(AbstractRowFit):
     prior: tuple[float, ...] | None = eqx.field(default=None, converter=as_floats)
     default_weighting: ClassVar[str] = "equal"
     costly: ClassVar[bool] = True
+    norm: ClassVar[int] = 1
     registered_as: ClassVar[dict[str, dict[str, Any]]] = {
         name: {"solver": name} for name in SWARMS}
 

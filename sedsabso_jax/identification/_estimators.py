@@ -81,6 +81,7 @@ class AbstractLeastSquares(Estimator):
     physical: ClassVar[bool] = False
     costly: ClassVar[bool] = False
     normal_equations: ClassVar[bool] = True
+    norm: ClassVar[int] = 2
 
     def fit(self, problem: FitProblem) -> EstimatorFit:
         rows = weigh(problem, self.sigma, default=self.default_weighting, factor=True)
@@ -143,6 +144,7 @@ class L1(AbstractRowFit):
     name: ClassVar[str] = "L1"
     default_weighting: ClassVar[str] = "equal"
     costly: ClassVar[bool] = False
+    norm: ClassVar[int] = 1
     registered_as: ClassVar[dict[str, dict[str, Any]]] = {"L1": {}}
 
     def __check_init__(self):
@@ -169,6 +171,7 @@ class LevenbergMarquardt(AbstractRowFit):
     name: ClassVar[str] = "LM"
     default_weighting: ClassVar[str] = "equal"
     costly: ClassVar[bool] = False
+    norm: ClassVar[int] = 2
     registered_as: ClassVar[dict[str, dict[str, Any]]] = {"LM": {}}
 
     def __check_init__(self):
@@ -210,6 +213,7 @@ class PhysicallyConsistent(Estimator):
     physical: ClassVar[bool] = True
     costly: ClassVar[bool] = False
     normal_equations: ClassVar[bool] = True
+    norm: ClassVar[int] = 2
 
     def __check_init__(self):
         if not isinstance(self.least_squares, AbstractLeastSquares):

@@ -210,6 +210,8 @@ class Estimator(eqx.Module):
     #: (least squares with one weight per joint): validations then fit compressed rows
     #: (:mod:`._compressed`).
     normal_equations: eqx.AbstractClassVar[bool]
+    #: The norm of the weighted residual the fit minimises: 2 (least squares) or 1.
+    norm: eqx.AbstractClassVar[int]
     #: Name -> the options it fixes, for :meth:`named` and ``--method``.
     registered_as: ClassVar[dict[str, dict[str, Any]]] = {}
 
@@ -258,6 +260,12 @@ class Estimator(eqx.Module):
     def weights(self) -> str:
         """The kind of row weighting (one of :data:`WEIGHTINGS`)."""
         return weighting(self.sigma, self.default_weighting)
+
+    def loss(self, residual: np.ndarray) -> float:
+        """What the fit minimises of its weighted ``residual``: the sum of squares (norm
+        2) or of absolute values (norm 1)."""
+        r = np.asarray(residual, dtype=float)
+        return float(r @ r) if self.norm == 2 else float(np.abs(r).sum())
 
     @property
     def needs_limits(self) -> bool:

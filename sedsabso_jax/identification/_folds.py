@@ -17,6 +17,8 @@ from ._compressed import subset_problems
 from ._fitting import Estimator, FitProblem, describe
 from ._metrics import Metrics, validation_metrics
 from ._model import TorqueModel
+from ._shapes import Samples
+from ._shapes import fit as fit_model
 
 #: Folds of :func:`~._validation.cross_validate` unless told otherwise.
 DEFAULT_FOLDS = 5
@@ -161,8 +163,9 @@ class SplitRows:
 
     def __init__(self, model: TorqueModel, Y: Float[np.ndarray, "T n d"],
                  tau: Float[np.ndarray, "T n"], limits: Float[np.ndarray, " n"] | None,
-                 splits: Splits):
+                 splits: Splits, samples: Samples | None = None):
         self.model, self.Y, self.tau, self.limits, self.splits = model, Y, tau, limits, splits
+        self.samples = samples  # what a model that is not linear is fitted anew from
         self._compressed: list[FitProblem] | None = None
 
     def problems(self, estimator: Estimator) -> list[FitProblem]:
@@ -186,10 +189,13 @@ def cross_validation_of(estimator: Estimator, rows: SplitRows, validation: dict,
     # LWR4+'s default identify 1.3x slower on 2 idle cores, 14.1-15.1 s against
     # 10.5-10.9 s); the user's setting is restored on leaving
     with threadpool_limits(limits=1, user_api="blas"):
-        for problem, test in zip(rows.problems(estimator), splits.test):
-            fit = estimator.fit(problem)
+        problems = None if rows.model.nonlinear else rows.problems(estimator)
+        for k, test in enumerate(splits.test):
             measured.append(tau[test])
-            predicted.append(Y[test] @ fit.x)
+            if problems is not None:
+                predicted.append(Y[test] @ estimator.fit(problems[k]).x)
+            else:
+                predicted.append(_refit_and_predict(estimator, rows, k, test))
             scores.append(score_of(validation_metrics(measured[-1], predicted[-1], limits)))
             if on_fit is not None:
                 on_fit()
@@ -199,6 +205,18 @@ def cross_validation_of(estimator: Estimator, rows: SplitRows, validation: dict,
         fold_scores=np.asarray(scores), period_s=splits.period_s, folds=splits.labels,
         n_parameters=rows.model.dim, settings=settings, estimator=estimator, model=rows.model,
         validation=validation, split_names=splits.names, split_parts=splits.parts)
+
+
+def _refit_and_predict(estimator: Estimator, rows: SplitRows, k: int,
+                       test: np.ndarray) -> np.ndarray:
+    """Split ``k``'s test torques as predicted by the whole fit of a model that is not
+    linear (:attr:`~._model.TorqueModel.nonlinear`; :func:`~._shapes.fit`: its scales
+    searched, its load settled) to the split's training samples."""
+    if rows.samples is None:
+        raise ValueError("a torque model that is not linear is validated from its samples")
+    fitted = fit_model(estimator, rows.model, rows.samples.subset(rows.splits.train[k]),
+                       rows.limits, warn=False)
+    return rows.samples.subset(test).predict(fitted.model, fitted.fit.x)
 
 
 def not_worse(cv: CrossValidation, best: CrossValidation) -> bool:

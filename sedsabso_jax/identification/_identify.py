@@ -29,9 +29,11 @@ from ..dynamics._urdf_writer import to_urdf, update_urdf
 from ..measurements._container import Measurements
 from ..optim._linear import factorize
 from ._estimators import OLS
-from ._fitting import Estimator, FitProblem, Limits, describe, per_joint
+from ._fitting import Estimator, Limits, describe, per_joint
 from ._metrics import nrms_over_limits
 from ._model import TorqueModel, regrouped_message
+from ._shapes import Samples
+from ._shapes import fit as fit_model
 from ._uncertainty import parameter_std, relative_std_percent
 
 #: Joint data: a :class:`~sedsabso_jax.Measurements`, several of them (recordings fitted
@@ -308,8 +310,8 @@ def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
     else:
         q, qd, qdd, tau = data_arrays(robot, data)
     t0 = time.perf_counter()
-    Y = model.regressor(q, qd, qdd, index if model.recordings > 1 else None)  # (T, n, d)
-    out = estimator.fit(FitProblem(model, Y, tau, limits))
+    fitted = fit_model(estimator, model, Samples(q, qd, qdd, tau, index), limits)
+    model, out, Y = fitted.model, fitted.fit, fitted.Y  # Y: (T, n, d)
     run_s = time.perf_counter() - t0
 
     x = out.x
@@ -322,7 +324,8 @@ def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
            "samples": int(Y.shape[0]), "seconds": float(run_s)}
     if limits is not None:
         fit["nrms_limits_percent"] = float(np.mean(nrms_over_limits(rms, limits)))
-    settings = {**describe(estimator, model, limits), "sigma": out.sigma, **out.extra}
+    settings = {**describe(estimator, model, limits), "sigma": out.sigma, **out.extra,
+                **fitted.report}
     return Identification(names=model.names, values=x, model=model, method=estimator.name,
                           settings=jsonable(settings), fit=jsonable(fit),
                           full_params=out.full, result=out.result, estimator=estimator,

@@ -22,6 +22,7 @@ identified apart. :attr:`TorqueModel.regrouped` names them.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from collections.abc import Iterable
 
@@ -37,8 +38,9 @@ from ..dynamics._base_parameters import (
 )
 from ..dynamics._robot import Robot
 from ..measurements._transmission import Transmission, TransmissionLike, coupled_motors
+from ._options import as_floats
+from ._term_base import AbstractTerm, Shapes, Signals
 from ._terms import (
-    AbstractTerm,
     Armature,
     CoupledMotorFriction,
     Offset,
@@ -78,6 +80,7 @@ class TorqueModel(eqx.Module):
     terms: tuple[AbstractTerm, ...] = eqx.field(default=(), converter=canonical_order)
     transmission: np.ndarray | None = eqx.field(default=None, converter=_matrix)
     recordings: int = 1
+    load_point: tuple[float, ...] | None = eqx.field(default=None, converter=as_floats)
 
     def __check_init__(self):
         if not isinstance(self.terms, tuple) or not all(isinstance(t, AbstractTerm)
@@ -100,6 +103,11 @@ class TorqueModel(eqx.Module):
             if not isinstance(K, np.ndarray) or K.shape != (n, n) or not np.all(np.isfinite(K)):
                 raise ValueError(f"transmission must be a finite ({n}, {n}) matrix for robot "
                                  f"{self.robot.name!r}, got {K!r}")
+        if self.load_point is not None and (
+                not isinstance(self.load_point, tuple) or len(self.load_point) != self.base.rank
+                or not np.all(np.isfinite(self.load_point))):
+            raise ValueError(f"load_point must be {self.base.rank} finite base-parameter "
+                             f"values, got {self.load_point!r}")
         self._extra_names()  # each term checks that it applies
 
     @classmethod
@@ -198,28 +206,102 @@ class TorqueModel(eqx.Module):
     def dim(self) -> int:
         return len(self.names)
 
-    def _full_regressor(self, q, qd, qdd, recording=None) -> np.ndarray:
+    def _full_regressor(self, q, qd, qdd, recording=None, base_rows=None) -> np.ndarray:
         q, qd, qdd = (np.asarray(a, dtype=float) for a in (q, qd, qdd))
-        Y = np.asarray(self.base.regressor(q, qd, qdd))
+        Y = np.asarray(self.base.regressor(q, qd, qdd) if base_rows is None else base_rows)
         n = self.robot.n_joints
         batch = Y.shape[:-2]
-        qd, qdd = np.broadcast_to(qd, batch + (n,)), np.broadcast_to(qdd, batch + (n,))
+        q, qd, qdd = (np.broadcast_to(a, batch + (n,)) for a in (q, qd, qdd))
+        coulomb = np.sign(qd)
         for term in self.terms:
             shape = term.coulomb(qd)
             if shape is not None:
+                coulomb = shape
                 Y = Y.copy()
                 Y[..., np.arange(n), np.array(self.base.joint_columns("FC"))] = shape
-        extra = [term.columns(self, qd, qdd, recording) for term in self.terms]
+        load = None
+        if self.needs_load:  # the rigid-body torque at the load point
+            rigid = self.rigid_columns
+            load = Y[..., rigid] @ np.asarray(self.load_values)[rigid]
+        signals = Signals(q, qd, qdd, recording, coulomb, load)
+        extra = [term.columns(self, signals) for term in self.terms]
         return np.concatenate([Y, *extra], -1)
+
+    @property
+    def needs_load(self) -> bool:
+        """Whether a term's columns read the model's rigid-body torque
+        (:class:`~._terms.LoadFriction`)."""
+        return any(term.needs_load for term in self.terms)
+
+    @property
+    def rigid_columns(self) -> np.ndarray:
+        """The base columns of the rigid body: all but each joint's viscous and Coulomb
+        friction (which never regroup)."""
+        friction = {c for p in ("FV", "FC") for c in self.base.joint_columns(p)
+                    if c is not None}
+        return np.array([c for c in range(self.base.rank) if c not in friction], dtype=int)
+
+    @property
+    def load_values(self) -> tuple[float, ...]:
+        """The base-parameter values whose rigid-body torque loads the joints:
+        :attr:`load_point`, or the robot's own (a-priori) parameters projected on the
+        base."""
+        if self.load_point is not None:
+            return self.load_point
+        return tuple(float(v) for v in np.asarray(self.base.values))
+
+    def linearized_at(self, values: Float[ArrayLike, " d"]) -> TorqueModel:
+        """The model whose load point is ``values``' base part (the load-dependent
+        friction then reads the torque of these parameters); the model itself when no
+        term reads the load."""
+        if not self.needs_load:
+            return self
+        base = np.asarray(values, dtype=float)[:self.base.rank]
+        return dataclasses.replace(self, load_point=tuple(float(v) for v in base))
+
+    def shapes(self) -> list[tuple[int, Shapes]]:
+        """The velocity scales a fit searches: ``(term index, Shapes)`` of each term with
+        fitted scales."""
+        out = []
+        for i, term in enumerate(self.terms):
+            found = term.shapes(self)
+            if found is not None:
+                out.append((i, found))
+        return out
+
+    def with_shapes(self, values: Float[ArrayLike, " k"]) -> TorqueModel:
+        """The model with the searched velocity scales set to ``values`` (those of
+        :meth:`shapes`, concatenated)."""
+        values = np.asarray(values, dtype=float)
+        terms, k = list(self.terms), 0
+        for i, found in self.shapes():
+            m = len(found.values)
+            terms[i] = terms[i].with_shapes(values[k:k + m])
+            k += m
+        if k != values.size:
+            raise ValueError(f"expected {k} velocity scales, got {values.size}")
+        return dataclasses.replace(self, terms=tuple(terms))
+
+    @property
+    def nonlinear(self) -> bool:
+        """Whether fitting the model takes more than one linear fit: a term reads the
+        model's own torque, or has velocity scales to search."""
+        return self.needs_load or bool(self.shapes())
 
     def regressor(self, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
                   qdd: Float[ArrayLike, "*batch n"],
-                  recording: Int[ArrayLike, "*batch"] | None = None
-                  ) -> Float[np.ndarray, "*batch n d"]:
+                  recording: Int[ArrayLike, "*batch"] | None = None, *,
+                  base_rows: Float[ArrayLike, "*batch n b"] | None = None,
+                  every_column: bool = False) -> Float[np.ndarray, "*batch n d"]:
         """``(..., n, dim)``: the base columns, then the identifiable extra columns;
         ``recording``: the recording of each sample, for one offset per recording (None:
-        new motions, the offsets' mean)."""
-        Y = self._full_regressor(q, qd, qdd, recording)
+        new motions, the offsets' mean); ``base_rows``: the base regressor at these
+        samples when already computed (a fit that tries many velocity scales);
+        ``every_column``: also the extra columns the base regressor spans (which ones
+        those are may change with a term's velocity scale)."""
+        Y = self._full_regressor(q, qd, qdd, recording, base_rows)
+        if every_column:
+            return Y
         keep = np.r_[np.arange(self.base.rank), self.base.rank + self._kept]
         return Y[..., keep] if len(keep) < Y.shape[-1] else Y
 
@@ -227,11 +309,12 @@ class TorqueModel(eqx.Module):
                 qd: Float[ArrayLike, "*batch n"], qdd: Float[ArrayLike, "*batch n"],
                 recording: Int[ArrayLike, "*batch"] | None = None
                 ) -> Float[np.ndarray, "*batch n"]:
-        """Torques ``regressor(q, qd, qdd, recording) @ values``, ``(..., n)``."""
+        """Torques ``regressor(q, qd, qdd, recording) @ values``, ``(..., n)``; a model
+        with load-dependent friction reads the rigid-body torque of ``values`` itself."""
         values = np.asarray(values, dtype=float)
         if values.shape != (self.dim,):
             raise ValueError(f"values must have shape ({self.dim},), got {values.shape}")
-        return self.regressor(q, qd, qdd, recording) @ values
+        return self.linearized_at(values).regressor(q, qd, qdd, recording) @ values
 
 
 def regrouped_message(model: TorqueModel) -> str:

@@ -65,6 +65,39 @@ PARAMETER_UNITS = ("in SI units by name (kg m^2 for inertia XX..ZZ, kg m for fir
 MODEL_UNITS = ("extra terms in N m for a torque offset OFF, N m s^2/rad^2 for velocity-squared "
                "friction FQ, kg m^2 for a rotor inertia IA, N m s/rad and N m for a coupled "
                "motor's viscous and Coulomb friction FVM, FCM (IA, FVM, FCM motor-side)")
+#: The units of the terms beyond :data:`MODEL_UNITS`, written where the model has them.
+MORE_UNITS = {"FS": "N m for Stribeck's excess friction FS",
+              "FL": "N m per N m transmitted for friction growing with the load FL",
+              "FLV": "s/rad for viscous friction growing with the load FLV"}
+
+
+def model_units(names: Sequence[str]) -> str:
+    """:data:`MODEL_UNITS`, and the units of :data:`MORE_UNITS` that ``names`` use."""
+    prefixes = {n.rstrip("0123456789") for n in names}
+    more = [unit for prefix, unit in MORE_UNITS.items() if prefix in prefixes]
+    return MODEL_UNITS + "".join(f"; {unit}" for unit in more)
+
+
+def shapes_lines(settings: dict) -> list[str]:
+    """What the fit found of a model that is not linear: the velocity scales it searched
+    (value, standard deviation, on a bound) and whether the load's fixed point settled."""
+    lines = []
+    shapes = settings.get("shapes") or {}
+    if shapes:
+        def one(name: str, s: dict) -> str:
+            std = "inf" if s["std"] is None else f"{s['std']:.2g}"
+            return f"{name} = {s['value']:.4g} +- {std}{' (on a bound)' * s['at_bound']}"
+
+        found = ", ".join(one(name, s) for name, s in shapes.items())
+        lines.append(f"velocity scales searched [rad/s]: {found}")
+    load = settings.get("load")
+    if load:
+        state = "settled" if load["settled"] else "NOT settled"
+        lines.append(f"friction growing with the load: the fit's own rigid-body torque after "
+                     f"{load['iterations']} fits ({state})")
+    return ["", *lines] if lines else []
+
+
 #: The note under the first metrics table (:mod:`._metrics` defines the figures).
 METRICS_NOTE = columns_note(
     ("joint", "one row per joint, `overall` for all joints together"),
@@ -191,13 +224,15 @@ class IdentificationReport:
                      ("#", "row number"),
                      ("parameter", "a base parameter (Eq. 3-4, `R` where others are "
                       "regrouped onto it) or an extra term of the friction model"),
-                     ("value", f"the identified value {PARAMETER_UNITS}, {MODEL_UNITS}"),
+                     ("value", f"the identified value {PARAMETER_UNITS}, "
+                      f"{model_units(ident.names)}"),
                      ("std", "its standard deviation in the value's unit, from the residual "
                       "covariance s^2 (W^T W)^-1 of the weighted rows W (exact for OLS and WLS "
                       "with independent errors and the model right; a linearisation that "
                       "ignores the constraints and the prior of a physical fit; `inf`: not "
                       "determined by the data)"),
                      ("relative std [%]", "100 std / |value|")),
+                 *shapes_lines(ident.settings),
                  "", "fit (identification data):", "", metrics_table(self.fit, joints), "",
                  METRICS_NOTE]
         if self.cross_validation is not None:

@@ -10,8 +10,19 @@ The base regressor already holds each joint's viscous and Coulomb friction
     CoupledMotorFriction() + K_m^T (FVM_m u_m + FCM_m sign(u_m)), u_m = K_m . qd:
                                                         friction of a motor m that turns
                                                         with several joints
+    Stribeck(v_s)        + FS_j exp(-(qd_j / v_s)^2) c_j(qd)   friction above Coulomb's
+                                                        near rest (Stribeck's curve)
+    LoadFriction()       + FL_j |tau_load_j| c_j(qd)    Coulomb friction growing with the
+                                                        torque the joint transmits
 
-``K`` is the model's transmission (motor angles ``theta = K q``; ``K = 1`` without one).
+``K`` is the model's transmission (motor angles ``theta = K q``; ``K = 1`` without one);
+``c_j(qd)`` the model's Coulomb shape (``sign(qd_j)``, or ``tanh(qd_j / v)`` with the
+smooth term); ``tau_load`` the model's own rigid-body torque (the base columns but
+friction, at the model's load point, :attr:`~._model.TorqueModel.load_point`).
+
+A term's velocity scale (smooth Coulomb's ``v``, Stribeck's ``v_s``) is fixed, or, with
+``fitted=True``, one per joint searched by the fit (:mod:`._shapes`); the command line
+writes ``smooth:fit``, ``stribeck:fit``, ``smooth:0.05`` or ``load:viscous``.
 A term is an immutable value that knows its columns, their names and whether a physical
 body has its coefficients ``>= 0``; adding one is one final class here (its ``name`` is
 its word in the command's ``--friction a+b`` text, its place in :data:`FRICTION_TERMS`
@@ -21,102 +32,29 @@ the order of its columns). :func:`parse_friction` reads that text, once, at the 
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 import abc
 import dataclasses
-from typing import ClassVar, Protocol
+from typing import ClassVar
 
 import equinox as eqx
 import numpy as np
 
-from ..dynamics._base_parameters import BaseParameters
-from ..dynamics._robot import Robot
-from ._options import as_float, check_number
+from ._options import as_float, as_floats, check_number
+from ._term_base import (
+    TERMS,
+    AbstractColumns,
+    AbstractTerm,
+    Shapes,
+    Signals,
+    TorqueModelView,
+    diagonal,
+    through_motors,
+)
 
 #: The rigid-body model's own friction, always in the model (the base regressor's columns).
 BASE_FRICTION = "viscous-coulomb"
 #: Velocity scale (rad/s or m/s) of :class:`SmoothCoulomb` unless told.
 SMOOTH_VELOCITY = 0.02
-#: Term name -> final class, in column order (each class registers itself when defined).
-_TERMS: dict[str, type["AbstractTerm"]] = {}
-
-
-class TorqueModelView(Protocol):
-    """What a term reads of its torque model (:class:`~._model.TorqueModel`)."""
-
-    @property
-    def robot(self) -> Robot: ...
-
-    @property
-    def base(self) -> BaseParameters: ...
-
-    @property
-    def recordings(self) -> int: ...
-
-    @property
-    def motor_matrix(self) -> np.ndarray: ...
-
-    @property
-    def coupled_motors(self) -> tuple[int, ...]: ...
-
-
-class AbstractTerm(eqx.Module):
-    """A term of the torque model beyond the rigid-body base regressor (module
-    docstring): its columns (:meth:`columns`, named by :meth:`names`), or a new shape of
-    the Coulomb columns (:meth:`coulomb`). Final subclasses set ``name`` (the word in
-    ``--friction``) and ``nonnegative`` (whether a physical body has its coefficients
-    ``>= 0``, a constraint of the physically consistent fit)."""
-
-    name: eqx.AbstractClassVar[str]
-    nonnegative: eqx.AbstractClassVar[bool]
-
-    def __init_subclass__(cls, **kwargs):
-        super().__init_subclass__(**kwargs)
-        if "name" in cls.__dict__:  # a final class: known by its name, in definition order
-            _TERMS[cls.name] = cls
-
-    @abc.abstractmethod
-    def names(self, model: TorqueModelView) -> tuple[str, ...]:
-        """The names of this term's columns in ``model`` (a ValueError where the term does
-        not apply to the model)."""
-
-    @abc.abstractmethod
-    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
-                recording: np.ndarray | None) -> np.ndarray:
-        """The columns ``(..., n, len(names))`` at velocities and accelerations ``(..., n)``
-        (``recording``: each sample's recording, or None)."""
-
-    @abc.abstractmethod
-    def coulomb(self, qd: np.ndarray) -> np.ndarray | None:
-        """The Coulomb columns' values in place of ``sign(qd)``, or None to keep them."""
-
-    def settings(self) -> dict:
-        """The term's options for the report, ``{name_option: value}``."""
-        return {f"{self.name}_{f.name}": getattr(self, f.name)
-                for f in dataclasses.fields(self)}
-
-
-class AbstractColumns(AbstractTerm):
-    """A term that adds columns and leaves the Coulomb columns as they are."""
-
-    def coulomb(self, qd: np.ndarray) -> None:
-        return None
-
-
-def _diagonal(values: np.ndarray | float, batch: tuple[int, ...], n: int) -> np.ndarray:
-    """``(..., n, n)`` columns with ``values`` on joint ``j``'s own column ``j``."""
-    E = np.zeros(batch + (n, n))
-    E[..., np.arange(n), np.arange(n)] = values
-    return E
-
-
-def _through_motors(K: np.ndarray, motors: list[int], v: np.ndarray, sign: bool = False
-                    ) -> np.ndarray:
-    """Columns ``K[m, j] u_m`` for joint ``j``, motor ``m`` of ``motors``, with ``u_m =
-    K_m . v`` (or its sign): a motor-side coefficient seen at the joints."""
-    u = v @ K[motors].T  # (..., motors)
-    if sign:
-        u = np.sign(u)
-    return K[motors].T * u[..., None, :]
-
-
+#: Stribeck velocity (rad/s or m/s) of :class:`Stribeck` unless told.
+STRIBECK_VELOCITY = 0.1
 class Offset(AbstractColumns):
     """``OFF_j``: a constant torque per joint (a torque sensor's zero). With a model of
     ``R > 1`` recordings, one per joint and recording, ``OFFj.r``: rows of recording ``r``
@@ -132,12 +70,11 @@ class Offset(AbstractColumns):
             return tuple(f"OFF{j + 1}.{r + 1}" for j in range(n) for r in range(R))
         return tuple(f"OFF{j + 1}" for j in range(n))
 
-    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
-                recording: np.ndarray | None) -> np.ndarray:
+    def columns(self, model: TorqueModelView, s: Signals) -> np.ndarray:
         n, R = model.robot.n_joints, model.recordings
-        batch = qd.shape[:-1]
+        batch, recording = s.qd.shape[:-1], s.recording
         if R == 1:
-            return _diagonal(1.0, batch, n)
+            return diagonal(1.0, batch, n)
         if recording is None:
             share = np.full(batch + (R,), 1.0 / R)
         else:
@@ -159,15 +96,14 @@ class AbstractJointFriction(AbstractColumns):
     prefix: eqx.AbstractClassVar[str]
 
     @abc.abstractmethod
-    def torque(self, qd: np.ndarray) -> np.ndarray:
-        """Each joint's column value at velocities ``qd (..., n)``."""
+    def torque(self, s: Signals) -> np.ndarray:
+        """Each joint's column value at the samples of ``s``, ``(..., n)``."""
 
     def names(self, model: TorqueModelView) -> tuple[str, ...]:
         return tuple(f"{self.prefix}{j + 1}" for j in range(model.robot.n_joints))
 
-    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
-                recording: np.ndarray | None) -> np.ndarray:
-        return _diagonal(self.torque(qd), qd.shape[:-1], model.robot.n_joints)
+    def columns(self, model: TorqueModelView, s: Signals) -> np.ndarray:
+        return diagonal(self.torque(s), s.qd.shape[:-1], model.robot.n_joints)
 
 
 class Quadratic(AbstractJointFriction):
@@ -178,34 +114,117 @@ class Quadratic(AbstractJointFriction):
     prefix: ClassVar[str] = "FQ"
     nonnegative: ClassVar[bool] = True
 
-    def torque(self, qd: np.ndarray) -> np.ndarray:
-        return qd * np.abs(qd)
+    def torque(self, s: Signals) -> np.ndarray:
+        return s.qd * np.abs(s.qd)
 
 
-class SmoothCoulomb(AbstractTerm):
+def as_velocity(value: object) -> object:
+    """A velocity scale: one number for every joint (a float) or one per joint (a tuple of
+    floats); anything else as given, for the check to name."""
+    if isinstance(value, (list, tuple, np.ndarray)):
+        converted = as_floats(value)
+        return converted if isinstance(converted, tuple) else value
+    return as_float(value)
+
+
+def check_velocity(name: str, value: object) -> None:
+    """A velocity scale is a number > 0, or one per joint."""
+    for v in value if isinstance(value, tuple) else (value,):
+        check_number(name, v, strict=True)
+
+
+class AbstractVelocityScale(AbstractTerm):
+    """A term with a velocity scale (rad/s or m/s): fixed (one for every joint, or one
+    per joint), or with ``fitted=True`` one per joint searched by the fit from the value
+    given (:mod:`._shapes`) within :attr:`bounds`."""
+
+    velocity: eqx.AbstractVar[float | tuple[float, ...]]
+    fitted: eqx.AbstractVar[bool]
+    #: The scales' search box (rad/s or m/s).
+    bounds: ClassVar[tuple[float, float]] = (1e-4, 1.0)
+    #: The scales' names in reports: ``{symbol}{joint}``.
+    symbol: eqx.AbstractClassVar[str]
+    default_velocity: eqx.AbstractClassVar[float]
+
+    def per_joint(self, n: int) -> np.ndarray:
+        """The velocity scale of each of ``n`` joints."""
+        v = np.asarray(self.velocity, dtype=float)
+        if v.ndim and v.shape != (n,):
+            raise ValueError(f"{self.name}'s velocity must be one number or one per joint "
+                             f"({n}), got {len(v)}")
+        return np.broadcast_to(v, (n,))
+
+    @property
+    def text(self) -> str:
+        if self.fitted:
+            return f"{self.name}:fit"
+        if self.velocity != self.default_velocity:
+            return f"{self.name}:{self.velocity:g}" if isinstance(self.velocity, float) \
+                else f"{self.name}:" + ",".join(f"{v:g}" for v in self.velocity)
+        return self.name
+
+    @classmethod
+    def parse(cls, option: str | None) -> AbstractTerm:
+        if option is None:
+            return cls()  # type: ignore[call-arg]
+        if option == "fit":
+            return cls(fitted=True)  # type: ignore[call-arg]
+        try:
+            values = [float(v) for v in option.split(",")]
+        except ValueError:
+            raise ValueError(f"friction term {cls.name!r}: expected {cls.name}:fit or "
+                             f"{cls.name}:VELOCITY (rad/s, one or one per joint, "
+                             f"comma-separated), got {cls.name}:{option}") from None
+        return cls(velocity=values[0] if len(values) == 1 else tuple(values))  # type: ignore[call-arg]
+
+    def shapes(self, model: TorqueModelView) -> Shapes | None:
+        if not self.fitted:
+            return None
+        n = model.robot.n_joints
+        lo, hi = self.bounds
+        return Shapes(tuple(f"{self.symbol}{j + 1}" for j in range(n)),
+                      np.clip(self.per_joint(n), lo, hi), np.full(n, lo), np.full(n, hi))
+
+    def with_shapes(self, values: np.ndarray) -> AbstractTerm:
+        return dataclasses.replace(self, velocity=tuple(float(v) for v in values))
+
+    def settings(self) -> dict:
+        v = self.velocity
+        out: dict = {f"{self.name}_velocity": list(v) if isinstance(v, tuple) else v}
+        if self.fitted:
+            out[f"{self.name}_fitted"] = True
+        return out
+
+
+class SmoothCoulomb(AbstractVelocityScale):
     """Coulomb friction without the jump at rest: ``tanh(qd_j / velocity)`` in place of
-    ``sign(qd_j)`` in each joint's Coulomb column (``velocity`` in rad/s or m/s, > 0);
-    no columns of its own."""
+    ``sign(qd_j)`` in each joint's Coulomb column (``velocity`` in rad/s or m/s, > 0:
+    one, one per joint, or with ``fitted=True`` one per joint searched by the fit); no
+    columns of its own."""
 
-    velocity: float = eqx.field(default=SMOOTH_VELOCITY, converter=as_float)
+    velocity: float | tuple[float, ...] = eqx.field(default=SMOOTH_VELOCITY,
+                                                    converter=as_velocity)
+    fitted: bool = False
     name: ClassVar[str] = "smooth"
     nonnegative: ClassVar[bool] = False
+    symbol: ClassVar[str] = "v_smooth"
+    default_velocity: ClassVar[float] = SMOOTH_VELOCITY
 
     def __check_init__(self):
-        check_number("SmoothCoulomb's velocity", self.velocity, strict=True)
+        check_velocity("SmoothCoulomb's velocity", self.velocity)
 
     def names(self, model: TorqueModelView) -> tuple[str, ...]:
         if None in model.base.joint_columns("FC"):
             raise ValueError("the smooth Coulomb term needs every joint's Coulomb column in "
                              "the base set")
+        self.per_joint(model.robot.n_joints)
         return ()
 
-    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
-                recording: np.ndarray | None) -> np.ndarray:
-        return np.zeros(qd.shape[:-1] + (model.robot.n_joints, 0))
+    def columns(self, model: TorqueModelView, s: Signals) -> np.ndarray:
+        return np.zeros(s.qd.shape[:-1] + (model.robot.n_joints, 0))
 
     def coulomb(self, qd: np.ndarray) -> np.ndarray:
-        return np.tanh(qd / self.velocity)
+        return np.tanh(qd / self.per_joint(qd.shape[-1]))
 
 
 class Armature(AbstractColumns):
@@ -219,9 +238,8 @@ class Armature(AbstractColumns):
     def names(self, model: TorqueModelView) -> tuple[str, ...]:
         return tuple(f"IA{m + 1}" for m in range(model.robot.n_joints))
 
-    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
-                recording: np.ndarray | None) -> np.ndarray:
-        return _through_motors(model.motor_matrix, list(range(model.robot.n_joints)), qdd)
+    def columns(self, model: TorqueModelView, s: Signals) -> np.ndarray:
+        return through_motors(model.motor_matrix, list(range(model.robot.n_joints)), s.qdd)
 
 
 class CoupledMotorFriction(AbstractColumns):
@@ -241,15 +259,97 @@ class CoupledMotorFriction(AbstractColumns):
                              "turns several joints (a coupling)")
         return tuple(f"{k}{m + 1}" for k in ("FVM", "FCM") for m in motors)
 
-    def columns(self, model: TorqueModelView, qd: np.ndarray, qdd: np.ndarray,
-                recording: np.ndarray | None) -> np.ndarray:
+    def columns(self, model: TorqueModelView, s: Signals) -> np.ndarray:
         K, motors = model.motor_matrix, list(model.coupled_motors)
-        return np.concatenate([_through_motors(K, motors, qd),
-                               _through_motors(K, motors, qd, sign=True)], -1)
+        return np.concatenate([through_motors(K, motors, s.qd),
+                               through_motors(K, motors, s.qd, sign=True)], -1)
+
+
+class Stribeck(AbstractVelocityScale):
+    """``FS_j exp(-(qd_j / velocity)^2) c_j(qd)``: the friction above Coulomb's that
+    a joint shows near rest and loses as it speeds up (Stribeck's curve; ``FS_j >= 0``,
+    the static friction's excess), ``velocity`` the Stribeck velocity (rad/s or m/s,
+    > 0: one, one per joint, or fitted). Its columns are ``FS1..``."""
+
+    velocity: float | tuple[float, ...] = eqx.field(default=STRIBECK_VELOCITY,
+                                                    converter=as_velocity)
+    fitted: bool = False
+    name: ClassVar[str] = "stribeck"
+    nonnegative: ClassVar[bool] = True
+    symbol: ClassVar[str] = "v_stribeck"
+    default_velocity: ClassVar[float] = STRIBECK_VELOCITY
+
+    def __check_init__(self):
+        check_velocity("Stribeck's velocity", self.velocity)
+
+    def names(self, model: TorqueModelView) -> tuple[str, ...]:
+        n = model.robot.n_joints
+        self.per_joint(n)
+        return tuple(f"FS{j + 1}" for j in range(n))
+
+    def columns(self, model: TorqueModelView, s: Signals) -> np.ndarray:
+        v = self.per_joint(s.qd.shape[-1])
+        return diagonal(np.exp(-(s.qd / v) ** 2) * s.coulomb, s.qd.shape[:-1],
+                         model.robot.n_joints)
+
+    def coulomb(self, qd: np.ndarray) -> None:
+        return None
+
+
+class LoadFriction(AbstractColumns):
+    """``FL_j |tau_load_j| c_j(qd)``: Coulomb friction that grows with the torque the
+    joint transmits (a harmonic drive's or gearbox's teeth and bearings, loaded by it),
+    ``tau_load`` the model's own rigid-body torque (module docstring); ``FL_j >= 0``,
+    dimensionless (N m of friction per N m transmitted). With ``viscous=True`` also
+    ``FLV_j |tau_load_j| qd_j`` (s/rad). The coefficients are bilinear with the
+    rigid-body parameters: a fit iterates to the torque of its own parameters
+    (:func:`~._shapes.fit`)."""
+
+    viscous: bool = False
+    name: ClassVar[str] = "load"
+    nonnegative: ClassVar[bool] = True
+
+    def __check_init__(self):
+        if not isinstance(self.viscous, bool):
+            raise ValueError(f"LoadFriction's viscous must be True or False, got "
+                             f"{self.viscous!r}")
+
+    @property
+    def needs_load(self) -> bool:
+        return True
+
+    @property
+    def text(self) -> str:
+        return "load:viscous" if self.viscous else "load"
+
+    @classmethod
+    def parse(cls, option: str | None) -> AbstractTerm:
+        if option not in (None, "viscous"):
+            raise ValueError(f"friction term 'load': expected load or load:viscous, got "
+                             f"load:{option}")
+        return cls(viscous=option == "viscous")
+
+    def names(self, model: TorqueModelView) -> tuple[str, ...]:
+        n = model.robot.n_joints
+        kinds = ("FL", "FLV") if self.viscous else ("FL",)
+        return tuple(f"{k}{j + 1}" for k in kinds for j in range(n))
+
+    def columns(self, model: TorqueModelView, s: Signals) -> np.ndarray:
+        if s.load is None:
+            raise ValueError("LoadFriction's columns need the model's rigid-body torque")
+        n, batch = model.robot.n_joints, s.qd.shape[:-1]
+        load = np.abs(s.load)
+        out = [diagonal(load * s.coulomb, batch, n)]
+        if self.viscous:
+            out.append(diagonal(load * s.qd, batch, n))
+        return np.concatenate(out, -1)
+
+    def settings(self) -> dict:
+        return {"load_viscous": self.viscous}
 
 
 #: The words of ``--friction``'s ``a+b`` text, in column order.
-FRICTION_TERMS = (BASE_FRICTION, *_TERMS)
+FRICTION_TERMS = (BASE_FRICTION, *TERMS)
 
 
 def canonical_order(terms: object) -> object:
@@ -258,25 +358,32 @@ def canonical_order(terms: object) -> object:
     found = tuple(terms) if isinstance(terms, (tuple, list)) else terms
     if not isinstance(found, tuple) or not all(isinstance(t, AbstractTerm) for t in found):
         return found
-    return tuple(sorted(found, key=lambda t: list(_TERMS).index(t.name)))
+    return tuple(sorted(found, key=lambda t: list(TERMS).index(t.name)))
 
 
 def friction_text(terms: tuple[AbstractTerm, ...]) -> str:
     """The ``a+b`` text of ``terms`` (in column order): ``viscous-coulomb+offset+...``."""
-    return "+".join((BASE_FRICTION, *(t.name for t in terms)))
+    return "+".join((BASE_FRICTION, *(t.text for t in terms)))
 
 
 def parse_friction(text: str) -> tuple[AbstractTerm, ...]:
     """The terms of the command line's ``--friction`` text: words of
     :data:`FRICTION_TERMS` joined by ``+`` (``"viscous-coulomb+offset+quadratic"``; the
     base regressor's ``viscous-coulomb`` is always in the model, so ``"offset"`` is the
-    same), each term with its default options, in column order."""
+    same), each ``word`` or ``word:option`` (``smooth:fit``, ``smooth:0.05``,
+    ``stribeck:fit``, ``load:viscous``), in column order."""
     if not isinstance(text, str) or not text:
         raise ValueError(f"friction must be a string of terms joined by '+' from "
                          f"{FRICTION_TERMS}, got {text!r}")
-    words = {w.strip() for w in text.split("+")}
-    unknown = words - set(FRICTION_TERMS)
+    given: dict[str, str | None] = {}
+    for part in (p.strip() for p in text.split("+")):
+        word, _, option = part.partition(":")
+        given[word.strip()] = option.strip() or None
+    unknown = set(given) - set(FRICTION_TERMS)
     if unknown:
         raise ValueError(f"unknown friction term(s) {sorted(unknown)}; known: {FRICTION_TERMS} "
                          f"(joined by '+', e.g. 'viscous-coulomb+offset')")
-    return tuple(cls() for name, cls in _TERMS.items() if name in words)
+    if given.get(BASE_FRICTION) is not None:
+        raise ValueError(f"{BASE_FRICTION} takes no option, got "
+                         f"{BASE_FRICTION}:{given[BASE_FRICTION]}")
+    return tuple(cls.parse(given[name]) for name, cls in TERMS.items() if name in given)

@@ -67,6 +67,7 @@ from ._identify import (
     stacked,
 )
 from ._model import TorqueModel, candidate_models
+from ._shapes import Samples
 from ._splits import PhaseFolds, Splits, Validation
 
 #: The candidate estimators of :func:`select_model` (their weightings), simplest first.
@@ -116,8 +117,8 @@ class Prepared:
     def rows(self, model: TorqueModel, limits: np.ndarray | None) -> SplitRows:
         check_offsets(model, len(self.recordings))
         q, qd, qdd, tau, index = self.arrays
-        Y = model.regressor(q, qd, qdd, index if model.recordings > 1 else None)
-        return SplitRows(model, Y, tau, limits, self.splits)
+        samples = Samples(q, qd, qdd, tau, index)
+        return SplitRows(model, samples.rows(model), tau, limits, self.splits, samples)
 
     def validate(self, estimator: Estimator, rows: SplitRows,
                  on_fit: Callable[[], None] | None = None) -> CrossValidation:
