@@ -146,6 +146,9 @@ class AbstractVelocityScale(AbstractTerm):
     symbol: eqx.AbstractClassVar[str]
     default_velocity: eqx.AbstractClassVar[float]
 
+    def __check_init__(self):
+        check_velocity(f"{type(self).__name__}'s velocity", self.velocity)
+
     def per_joint(self, n: int) -> np.ndarray:
         """The velocity scale of each of ``n`` joints."""
         v = np.asarray(self.velocity, dtype=float)
@@ -209,9 +212,6 @@ class SmoothCoulomb(AbstractVelocityScale):
     nonnegative: ClassVar[bool] = False
     symbol: ClassVar[str] = "v_smooth"
     default_velocity: ClassVar[float] = SMOOTH_VELOCITY
-
-    def __check_init__(self):
-        check_velocity("SmoothCoulomb's velocity", self.velocity)
 
     def names(self, model: TorqueModelView) -> tuple[str, ...]:
         if None in model.base.joint_columns("FC"):
@@ -278,9 +278,6 @@ class Stribeck(AbstractVelocityScale):
     nonnegative: ClassVar[bool] = True
     symbol: ClassVar[str] = "v_stribeck"
     default_velocity: ClassVar[float] = STRIBECK_VELOCITY
-
-    def __check_init__(self):
-        check_velocity("Stribeck's velocity", self.velocity)
 
     def names(self, model: TorqueModelView) -> tuple[str, ...]:
         n = model.robot.n_joints
