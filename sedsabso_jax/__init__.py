@@ -63,6 +63,7 @@ from .identification._terms import Armature as Armature
 from .identification._terms import CoupledMotorFriction as CoupledMotorFriction
 from .identification._terms import LoadFriction as LoadFriction
 from .identification._terms import Offset as Offset
+from .identification._terms import Presliding as Presliding
 from .identification._terms import Quadratic as Quadratic
 from .identification._terms import SmoothCoulomb as SmoothCoulomb
 from .identification._terms import Stribeck as Stribeck
@@ -99,7 +100,7 @@ __all__ = [
     "L1Residual", "Result", "box_around", "iterations_for_budget", "evaluation_counts",
     "identify", "Identification", "select_and_identify", "IdentificationReport",
     "TorqueModel", "Offset", "Quadratic", "SmoothCoulomb", "Stribeck", "LoadFriction",
-    "Armature",
+    "Presliding", "Armature",
     "CoupledMotorFriction", "Estimator", "OLS", "WLS", "L1", "LevenbergMarquardt", "BoxSearch",
     "PhysicallyConsistent", "validation_metrics", "Metrics", "cross_validate",
     "select_model", "choose_prior_strength", "Validation", "PhaseFolds", "SpeedSplits",

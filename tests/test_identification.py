@@ -557,8 +557,8 @@ def test_parse_friction_reads_the_command_lines_text():
     assert parse_friction("coupling+armature") == (Armature(), CoupledMotorFriction())
     for text, match in [("viscous-coulomb+glue", r"^unknown friction term\(s\) \['glue'\]; "
                          r"known: \('viscous-coulomb', 'offset', 'quadratic', 'smooth', "
-                         r"'armature', 'coupling', 'stribeck', 'load'\) \(joined by '\+', "
-                         r"e\.g\. 'viscous-coulomb\+offset'\)$"),
+                         r"'armature', 'coupling', 'stribeck', 'load', 'presliding'\) "
+                         r"\(joined by '\+', e\.g\. 'viscous-coulomb\+offset'\)$"),
                         ("offset:2", r"^friction term 'offset' takes no option, got offset:2$"),
                         ("smooth:fast", r"^friction term 'smooth': expected smooth:fit or "
                                         r"smooth:VELOCITY"),
@@ -571,7 +571,7 @@ def test_parse_friction_reads_the_command_lines_text():
             parse_friction(text)
     assert sj.identification.FRICTION_TERMS == ("viscous-coulomb", "offset", "quadratic",
                                                 "smooth", "armature", "coupling", "stribeck",
-                                                "load")
+                                                "load", "presliding")
     assert parse_friction("smooth:fit+stribeck:0.05+load:viscous") == (
         SmoothCoulomb(fitted=True), sj.Stribeck(0.05), sj.LoadFriction(viscous=True))
     assert parse_friction("smooth:0.1,0.2,0.3") == (SmoothCoulomb((0.1, 0.2, 0.3)),)

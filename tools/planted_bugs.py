@@ -36,6 +36,7 @@ CAMPAIGNS = ["tests/test_compare_campaigns.py"]
 COMPOSE = ["tests/test_composition.py"]
 PATHS = ["tests/test_solver_paths.py"]
 FRICTION = ["tests/test_friction_terms.py"]
+STATE = ["tests/test_friction_state.py"]
 VALIDATIONS = ["tests/test_validations.py"]
 IDENTIFICATION = ["tests/test_identification.py"]
 
@@ -252,6 +253,19 @@ BUGS = [
     ("identification/_folds.py", "        problems = None if rows.model.nonlinear else",
      "        problems = None if False else", "a model that is not linear validated with "
      "its full-data load point and scales", FRICTION, None),
+    ("identification/_friction_state.py", "jnp.exp(-jnp.abs(d) / q_c)",
+     "jnp.exp(-(jnp.abs(d) + 1e-4) / q_c)", "the presliding state decays at rest", STATE, None),
+    ("identification/_friction_state.py", "        start[1:] |= index[1:] != index[:-1]\n",
+     "", "the presliding state carried over from one recording to the next", STATE, None),
+    ("identification/_shapes.py", "        if model.stateful and self.whole is not None:\n"
+     "            return self.whole.rows(",
+     "        if False:\n            return self.whole.rows(",
+     "a subset's presliding state integrated on the subset alone", STATE, None),
+    ("identification/_shapes.py", "self.whole, np.asarray(self.keep)[index])",
+     "self.whole, index)", "a subset of a subset indexes the whole samples wrongly", STATE,
+     None),
+    ("identification/_friction_state.py", "        s = jnp.sign(d)\n",
+     "        s = jnp.sign(d) * 0.9\n", "the presliding state saturates below 1", STATE, None),
 ]
 
 

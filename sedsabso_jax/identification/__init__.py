@@ -32,6 +32,8 @@ from ._folds import CrossValidation as CrossValidation
 from ._folds import Splits as Splits
 from ._folds import phase_folds as phase_folds
 from ._folds import repeat_period as repeat_period
+from ._friction_state import dahl_state as dahl_state
+from ._friction_state import increments as increments
 from ._metrics import nrms_over_limits as nrms_over_limits
 from ._model import FRICTION_CANDIDATES as FRICTION_CANDIDATES
 from ._model import candidate_models as candidate_models
@@ -39,6 +41,7 @@ from ._payload import PAYLOAD_PARAMETERS as PAYLOAD_PARAMETERS
 from ._report import figure_torques as figure_torques
 from ._shapes import LOAD_RTOL as LOAD_RTOL
 from ._shapes import Fitted as Fitted
+from ._state_search import PreslidingProblem as PreslidingProblem
 from ._term_base import AbstractTerm as AbstractTerm
 from ._term_base import Shapes as Shapes
 from ._term_base import Signals as Signals
@@ -56,5 +59,5 @@ __all__ = [
     "estimator_candidates", "candidate_models", "Choice", "Names", "DefaultValidation",
     "nrms_over_limits", "FRICTION_TERMS", "AbstractTerm", "Signals", "Shapes", "Fitted",
     "LOAD_RTOL", "parse_friction", "figure_torques", "extrapolation", "Extrapolation",
-    "Splits", "PAYLOAD_PARAMETERS",
+    "Splits", "PAYLOAD_PARAMETERS", "PreslidingProblem", "dahl_state", "increments",
 ]

@@ -96,7 +96,9 @@ class Identification:
         was read from, with its inertials and joint friction replaced and everything else
         kept (:func:`~sedsabso_jax.dynamics.update_urdf`), or without one a new URDF of the
         chain (:func:`~sedsabso_jax.dynamics.to_urdf`). Extra terms a URDF cannot hold
-        (offsets, quadratic friction, armature, ...) are listed in a comment."""
+        (offsets, quadratic friction, armature, presliding, ...) and the scales fitted
+        (a presliding displacement ``q_c``, a Stribeck velocity) are listed in a
+        comment."""
         if self.full_params is None:
             raise ValueError("a URDF needs the full link parameters of a physically "
                              "consistent fit: identify with PhysicallyConsistent(...) "
@@ -104,9 +106,12 @@ class Identification:
         base = self.model.base.rank
         extras = ", ".join(f"{n} = {v:.6g}" for n, v in zip(self.names[base:],
                                                            self.values[base:]))
+        scales = ", ".join(f"{n} = {v:.6g}" for _, found in self.model.shapes()
+                           for n, v in zip(found.names, found.values))
         comment = (f"link parameters identified by sedsabso-jax {__version__} "
                    f"({self.method}, physically consistent, friction {self.model.friction})"
-                   + (f"; terms URDF cannot hold: {extras}" if extras else ""))
+                   + (f"; terms URDF cannot hold: {extras}" if extras else "")
+                   + (f"; their fitted scales: {scales}" if scales else ""))
         if source is not None:
             return update_urdf(source, self.model.robot, self.full_params, comment=comment)
         return to_urdf(self.model.robot, self.full_params, comment=comment)

@@ -234,6 +234,13 @@ class TorqueModel(eqx.Module):
         return any(term.needs_load for term in self.terms)
 
     @property
+    def stateful(self) -> bool:
+        """Whether a term's columns integrate a state along the samples
+        (:class:`~._terms.Presliding`): the rows need each recording whole, in time
+        order."""
+        return any(term.stateful for term in self.terms)
+
+    @property
     def rigid_columns(self) -> np.ndarray:
         """The base columns of the rigid body: all but each joint's viscous and Coulomb
         friction (which never regroup)."""

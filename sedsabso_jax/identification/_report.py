@@ -195,7 +195,8 @@ class IdentificationReport:
         data = joined(recordings)
         beyond = None if held_out is None else extrapolation(
             data, held_out, joint_names=ident.model.robot.joint_names, warn=True)
-        index = stacked(recordings)[-1] if ident.model.recordings > 1 else None
+        index = stacked(recordings)[-1] if (ident.model.recordings > 1
+                                            or ident.model.stateful) else None
         fit_pred = ident.model.predict(ident.values, data.q, data.qd, data.qdd, index)
         val_pred = None if held_out is None else ident.predict(held_out.q, held_out.qd,
                                                               held_out.qdd)

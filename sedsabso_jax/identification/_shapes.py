@@ -45,7 +45,11 @@ AT_BOUND = 1.02
 @dataclasses.dataclass(frozen=True, eq=False)
 class Samples:
     """The samples a fit reads, each ``(T, n)`` (``recording``: each sample's recording,
-    ``(T,)``, or None), in time order within each recording."""
+    ``(T,)``, or None), in time order within each recording. A :meth:`subset` remembers
+    the samples it was taken from (``whole``, and the indices ``keep`` into them): a
+    model whose columns integrate a state along the recording
+    (:attr:`~._model.TorqueModel.stateful`) has a subset's rows computed on the whole
+    samples, then taken, so the state never jumps over the samples left out."""
 
     q: np.ndarray
     qd: np.ndarray
@@ -53,27 +57,38 @@ class Samples:
     tau: np.ndarray
     recording: np.ndarray | None = None
     _base_rows: dict = dataclasses.field(default_factory=dict, repr=False)
+    whole: Samples | None = None
+    keep: np.ndarray | None = None
+
+    def _recording(self, model: TorqueModel) -> np.ndarray | None:
+        return self.recording if model.recordings > 1 or model.stateful else None
 
     def rows(self, model: TorqueModel, every_column: bool = False) -> np.ndarray:
         """``model``'s regressor at these samples, ``(T, n, d)`` (the base regressor
         computed once per set of base parameters; ``every_column``: as
         :meth:`~._model.TorqueModel.regressor`'s)."""
+        if model.stateful and self.whole is not None:
+            return self.whole.rows(model, every_column)[self.keep]
         key = id(model.base)
         if key not in self._base_rows:
             self._base_rows[key] = (model.base, np.asarray(
                 model.base.regressor(self.q, self.qd, self.qdd)))
-        return model.regressor(self.q, self.qd, self.qdd,
-                               self.recording if model.recordings > 1 else None,
+        return model.regressor(self.q, self.qd, self.qdd, self._recording(model),
                                base_rows=self._base_rows[key][1], every_column=every_column)
 
     def subset(self, keep: np.ndarray) -> Samples:
+        index = np.arange(self.q.shape[0])[keep]
+        whole, index = (self, index) if self.whole is None else (
+            self.whole, np.asarray(self.keep)[index])
         return Samples(self.q[keep], self.qd[keep], self.qdd[keep], self.tau[keep],
-                       None if self.recording is None else self.recording[keep])
+                       None if self.recording is None else self.recording[keep],
+                       whole=whole, keep=index)
 
     def predict(self, model: TorqueModel, values: np.ndarray) -> np.ndarray:
         """``model``'s torques with ``values`` at these samples."""
-        return model.predict(values, self.q, self.qd, self.qdd,
-                             self.recording if model.recordings > 1 else None)
+        if model.stateful and self.whole is not None:
+            return self.whole.predict(model, values)[self.keep]
+        return model.predict(values, self.q, self.qd, self.qdd, self._recording(model))
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

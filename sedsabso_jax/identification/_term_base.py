@@ -96,6 +96,12 @@ class AbstractTerm(eqx.Module):
         return False
 
     @property
+    def stateful(self) -> bool:
+        """Whether the columns integrate a state along the samples (each recording's
+        samples in time order, whole: a subset's columns are the whole's, taken)."""
+        return False
+
+    @property
     def text(self) -> str:
         """The term in the command line's ``--friction`` text (``name[:option]``)."""
         return self.name

@@ -14,6 +14,8 @@ The base regressor already holds each joint's viscous and Coulomb friction
                                                         near rest (Stribeck's curve)
     LoadFriction()       + FL_j |tau_load_j| c_j(qd)    Coulomb friction growing with the
                                                         torque the joint transmits
+    Presliding(q_c)      + FP_j z_j(q; q_c)             friction held at rest: Dahl's state
+                                                        along the recorded positions
 
 ``K`` is the model's transmission (motor angles ``theta = K q``; ``K = 1`` without one);
 ``c_j(qd)`` the model's Coulomb shape (``sign(qd_j)``, or ``tanh(qd_j / v)`` with the
@@ -21,8 +23,11 @@ smooth term); ``tau_load`` the model's own rigid-body torque (the base columns b
 friction, at the model's load point, :attr:`~._model.TorqueModel.load_point`).
 
 A term's velocity scale (smooth Coulomb's ``v``, Stribeck's ``v_s``) is fixed, or, with
-``fitted=True``, one per joint searched by the fit (:mod:`._shapes`); the command line
-writes ``smooth:fit``, ``stribeck:fit``, ``smooth:0.05`` or ``load:viscous``.
+``fitted=True``, one per joint searched by the fit (:mod:`._shapes`), and so is the
+presliding state's displacement ``q_c``; the command line writes ``smooth:fit``,
+``stribeck:fit``, ``smooth:0.05``, ``load:viscous``, ``presliding:fit`` or
+``presliding:0.001``. The presliding state (:mod:`._friction_state`) is the one term
+whose columns read the samples in time order (:attr:`AbstractTerm.stateful`).
 A term is an immutable value that knows its columns, their names and whether a physical
 body has its coefficients ``>= 0``; adding one is one final class here (its ``name`` is
 its word in the command's ``--friction a+b`` text, its place in :data:`FRICTION_TERMS`
@@ -37,7 +42,8 @@ from typing import ClassVar
 import equinox as eqx
 import numpy as np
 
-from ._options import as_float, as_floats, check_number
+from ._friction_state import presliding_state
+from ._scales import AbstractVelocityScale, as_scale, check_scale, per_joint
 from ._term_base import (
     TERMS,
     AbstractColumns,
@@ -55,6 +61,9 @@ BASE_FRICTION = "viscous-coulomb"
 SMOOTH_VELOCITY = 0.02
 #: Stribeck velocity (rad/s or m/s) of :class:`Stribeck` unless told.
 STRIBECK_VELOCITY = 0.1
+#: Characteristic displacement (rad or m) of :class:`Presliding` unless told.
+PRESLIDING_DISPLACEMENT = 0.002
+
 class Offset(AbstractColumns):
     """``OFF_j``: a constant torque per joint (a torque sensor's zero). With a model of
     ``R > 1`` recordings, one per joint and recording, ``OFFj.r``: rows of recording ``r``
@@ -118,87 +127,6 @@ class Quadratic(AbstractJointFriction):
         return s.qd * np.abs(s.qd)
 
 
-def as_velocity(value: object) -> object:
-    """A velocity scale: one number for every joint (a float) or one per joint (a tuple of
-    floats); anything else as given, for the check to name."""
-    if isinstance(value, (list, tuple, np.ndarray)):
-        converted = as_floats(value)
-        return converted if isinstance(converted, tuple) else value
-    return as_float(value)
-
-
-def check_velocity(name: str, value: object) -> None:
-    """A velocity scale is a number > 0, or one per joint."""
-    for v in value if isinstance(value, tuple) else (value,):
-        check_number(name, v, strict=True)
-
-
-class AbstractVelocityScale(AbstractTerm):
-    """A term with a velocity scale (rad/s or m/s): fixed (one for every joint, or one
-    per joint), or with ``fitted=True`` one per joint searched by the fit from the value
-    given (:mod:`._shapes`) within :attr:`bounds`."""
-
-    velocity: eqx.AbstractVar[float | tuple[float, ...]]
-    fitted: eqx.AbstractVar[bool]
-    #: The scales' search box (rad/s or m/s).
-    bounds: ClassVar[tuple[float, float]] = (1e-4, 1.0)
-    #: The scales' names in reports: ``{symbol}{joint}``.
-    symbol: eqx.AbstractClassVar[str]
-    default_velocity: eqx.AbstractClassVar[float]
-
-    def __check_init__(self):
-        check_velocity(f"{type(self).__name__}'s velocity", self.velocity)
-
-    def per_joint(self, n: int) -> np.ndarray:
-        """The velocity scale of each of ``n`` joints."""
-        v = np.asarray(self.velocity, dtype=float)
-        if v.ndim and v.shape != (n,):
-            raise ValueError(f"{self.name}'s velocity must be one number or one per joint "
-                             f"({n}), got {len(v)}")
-        return np.broadcast_to(v, (n,))
-
-    @property
-    def text(self) -> str:
-        if self.fitted:
-            return f"{self.name}:fit"
-        if self.velocity != self.default_velocity:
-            return f"{self.name}:{self.velocity:g}" if isinstance(self.velocity, float) \
-                else f"{self.name}:" + ",".join(f"{v:g}" for v in self.velocity)
-        return self.name
-
-    @classmethod
-    def parse(cls, option: str | None) -> AbstractTerm:
-        if option is None:
-            return cls()  # type: ignore[call-arg]
-        if option == "fit":
-            return cls(fitted=True)  # type: ignore[call-arg]
-        try:
-            values = [float(v) for v in option.split(",")]
-        except ValueError:
-            raise ValueError(f"friction term {cls.name!r}: expected {cls.name}:fit or "
-                             f"{cls.name}:VELOCITY (rad/s, one or one per joint, "
-                             f"comma-separated), got {cls.name}:{option}") from None
-        return cls(velocity=values[0] if len(values) == 1 else tuple(values))  # type: ignore[call-arg]
-
-    def shapes(self, model: TorqueModelView) -> Shapes | None:
-        if not self.fitted:
-            return None
-        n = model.robot.n_joints
-        lo, hi = self.bounds
-        return Shapes(tuple(f"{self.symbol}{j + 1}" for j in range(n)),
-                      np.clip(self.per_joint(n), lo, hi), np.full(n, lo), np.full(n, hi))
-
-    def with_shapes(self, values: np.ndarray) -> AbstractTerm:
-        return dataclasses.replace(self, velocity=tuple(float(v) for v in values))
-
-    def settings(self) -> dict:
-        v = self.velocity
-        out: dict = {f"{self.name}_velocity": list(v) if isinstance(v, tuple) else v}
-        if self.fitted:
-            out[f"{self.name}_fitted"] = True
-        return out
-
-
 class SmoothCoulomb(AbstractVelocityScale):
     """Coulomb friction without the jump at rest: ``tanh(qd_j / velocity)`` in place of
     ``sign(qd_j)`` in each joint's Coulomb column (``velocity`` in rad/s or m/s, > 0:
@@ -206,7 +134,7 @@ class SmoothCoulomb(AbstractVelocityScale):
     columns of its own."""
 
     velocity: float | tuple[float, ...] = eqx.field(default=SMOOTH_VELOCITY,
-                                                    converter=as_velocity)
+                                                    converter=as_scale)
     fitted: bool = False
     name: ClassVar[str] = "smooth"
     nonnegative: ClassVar[bool] = False
@@ -272,7 +200,7 @@ class Stribeck(AbstractVelocityScale):
     > 0: one, one per joint, or fitted). Its columns are ``FS1..``."""
 
     velocity: float | tuple[float, ...] = eqx.field(default=STRIBECK_VELOCITY,
-                                                    converter=as_velocity)
+                                                    converter=as_scale)
     fitted: bool = False
     name: ClassVar[str] = "stribeck"
     nonnegative: ClassVar[bool] = True
@@ -343,6 +271,92 @@ class LoadFriction(AbstractColumns):
 
     def settings(self) -> dict:
         return {"load_viscous": self.viscous}
+
+
+class Presliding(AbstractTerm):
+    """``FP_j z_j``: friction that a joint holds at rest and after a reversal builds up
+    over a displacement, Dahl's model (:mod:`._friction_state`): ``z_j`` the presliding
+    state, integrated along the recorded positions (``dz/dq = (1 - z sign(qd)) / q_c``),
+    ``FP_j >= 0`` (N m or N) the friction it saturates at. Beside the Coulomb column
+    ``FC_j sign(qd_j)``, which it equals in steady sliding, it adds what sliding friction
+    does not predict: the torque held while the joint stands still and the gradual
+    reversal. ``displacement`` is ``q_c`` (rad or m, > 0: one, one per joint, or with
+    ``fitted=True`` one per joint searched by the fit within :attr:`bounds`). The columns
+    need each recording's samples in time order (:attr:`stateful`)."""
+
+    displacement: float | tuple[float, ...] = eqx.field(default=PRESLIDING_DISPLACEMENT,
+                                                        converter=as_scale)
+    fitted: bool = False
+    name: ClassVar[str] = "presliding"
+    nonnegative: ClassVar[bool] = True
+    #: The displacements' search box (rad or m).
+    bounds: ClassVar[tuple[float, float]] = (1e-5, 0.5)
+
+    def __check_init__(self):
+        check_scale("Presliding's displacement", self.displacement)
+        if not isinstance(self.fitted, bool):
+            raise ValueError(f"Presliding's fitted must be True or False, got {self.fitted!r}")
+
+    @property
+    def stateful(self) -> bool:
+        return True
+
+    def per_joint(self, n: int) -> np.ndarray:
+        """The displacement ``q_c`` of each of ``n`` joints."""
+        return per_joint("presliding's displacement", self.displacement, n)
+
+    def names(self, model: TorqueModelView) -> tuple[str, ...]:
+        n = model.robot.n_joints
+        self.per_joint(n)
+        return tuple(f"FP{j + 1}" for j in range(n))
+
+    def columns(self, model: TorqueModelView, s: Signals) -> np.ndarray:
+        n = model.robot.n_joints
+        z = presliding_state(s.q, s.recording, self.per_joint(n))
+        return diagonal(z, s.q.shape[:-1], n)
+
+    def coulomb(self, qd: np.ndarray) -> None:
+        return None
+
+    @property
+    def text(self) -> str:
+        d = self.displacement
+        if self.fitted:
+            return "presliding:fit"
+        if d == PRESLIDING_DISPLACEMENT:
+            return "presliding"
+        return "presliding:" + (f"{d:g}" if isinstance(d, float) else ",".join(f"{v:g}"
+                                                                               for v in d))
+
+    @classmethod
+    def parse(cls, option: str | None) -> AbstractTerm:
+        if option is None or option == "fit":
+            return cls(fitted=option == "fit")
+        try:
+            values = [float(v) for v in option.split(",")]
+        except ValueError:
+            raise ValueError(f"friction term 'presliding': expected presliding:fit or "
+                             f"presliding:DISPLACEMENT (rad or m, one or one per joint, "
+                             f"comma-separated), got presliding:{option}") from None
+        return cls(values[0] if len(values) == 1 else tuple(values))
+
+    def shapes(self, model: TorqueModelView) -> Shapes | None:
+        if not self.fitted:
+            return None
+        n = model.robot.n_joints
+        lo, hi = self.bounds
+        return Shapes(tuple(f"q_c{j + 1}" for j in range(n)),
+                      np.clip(self.per_joint(n), lo, hi), np.full(n, lo), np.full(n, hi))
+
+    def with_shapes(self, values: np.ndarray) -> AbstractTerm:
+        return dataclasses.replace(self, displacement=tuple(float(v) for v in values))
+
+    def settings(self) -> dict:
+        d = self.displacement
+        out: dict = {"presliding_displacement": list(d) if isinstance(d, tuple) else d}
+        if self.fitted:
+            out["presliding_fitted"] = True
+        return out
 
 
 #: The words of ``--friction``'s ``a+b`` text, in column order.

@@ -1,0 +1,96 @@
+"""The presliding friction state (:class:`~._terms.Presliding`): Dahl's model, integrated
+along a recording by a ``lax.scan``.
+
+Dahl (1968; P. R. Dahl, *A solid friction model*, Aerospace Corp. TOR-0158(3107-18)-1;
+reviewed in Armstrong-Helouvry, Dupont and Canudas de Wit, *Automatica* 30(7), 1994,
+https://doi.org/10.1016/0005-1098(94)90209-7, Eq. 10) writes the friction ``F`` of a
+contact as a function of the distance travelled, not of the speed: with exponent 1,
+``dF/dx = sigma (1 - F/F_c sign(v))``. Written for the normalised state ``z = F / F_c``
+of each joint ``j`` and its characteristic displacement ``q_c = F_c / sigma`` (rad or m;
+the displacement over which the friction builds up, ~63 %, after a reversal)::
+
+    dz_j / dq_j = (1 - z_j sign(qd_j)) / q_c_j,     |z_j| <= 1,
+
+so ``z`` relaxes to ``sign(qd)`` exponentially in the distance moved and keeps its value
+while the joint stands still: it holds a torque at rest (presliding, the elastic
+deformation of the contacts before they slide), which no function of the speed predicts.
+Within one sampling interval the direction ``s = sign(dq)`` of the position increment
+``dq`` is constant, and the equation integrates exactly::
+
+    z_{k+1} = s + (z_k - s) exp(-|dq_k| / q_c)                       (exact, any |dq|)
+
+(no step-size limit: a stiff ``q_c`` far below the increments gives ``z = sign(dq)``,
+Coulomb's friction; ``dq = 0`` leaves ``z`` as it was). The increments are those of the
+recorded positions, so the state is rate-independent, as Dahl's is. Each recording starts
+from ``z = 0`` (the state before it is unknown); a sample of another recording starts
+anew. The state needs the samples in time order, each recording whole: a subset of a
+recording is integrated on the whole recording and then taken (:class:`~._shapes.Samples`).
+
+A LuGre model (Canudas de Wit et al., *IEEE TAC* 40(3), 1995) adds a rate-dependent
+state equation and Stribeck's curve; its extra parameters (``sigma_1``, ``v_s``) are the
+ones the KUKA's data could not fix (:class:`~._terms.Stribeck`'s fitted scales end on a
+bound), so the simpler, rate-independent state is the one delivered.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import lax
+from jaxtyping import Array, ArrayLike, Bool, Float
+
+
+def increments(q: Float[ArrayLike, "T n"], recording: ArrayLike | None = None
+               ) -> tuple[Float[np.ndarray, "T n"], Bool[np.ndarray, " T"]]:
+    """The position increments ``dq_k = q_k - q_{k-1}`` (``(T, n)``, 0 at a recording's
+    first sample) and where each recording starts (``(T,)``): at sample 0 and wherever
+    ``recording`` (each sample's recording, ``(T,)``; None: one recording) changes."""
+    q = np.asarray(q, dtype=float)
+    if q.ndim != 2:
+        raise ValueError(f"the presliding state needs positions (samples, joints) in time "
+                         f"order, got shape {q.shape}")
+    start = np.zeros(q.shape[0], dtype=bool)
+    start[:1] = True
+    if recording is not None:
+        index = np.asarray(recording)
+        if index.shape != q.shape[:1]:
+            raise ValueError(f"recording must hold one value per sample {q.shape[:1]}, got "
+                             f"shape {index.shape}")
+        start[1:] |= index[1:] != index[:-1]
+    dq = np.zeros_like(q)
+    dq[1:] = np.diff(q, axis=0)
+    dq[start] = 0.0
+    return dq, start
+
+
+def dahl_state(dq: Float[Array, "T n"], start: Bool[Array, " T"],
+               q_c: Float[ArrayLike, " n"]) -> Float[Array, "T n"]:
+    """The state ``z`` (``(T, n)``, in ``[-1, 1]``) after each sample's increment ``dq``
+    (:func:`increments`), from ``z = 0`` at each ``start``, for the characteristic
+    displacements ``q_c`` (``(n,)``, > 0): the exact update of the module docstring, a
+    ``lax.scan`` over the samples (jit-able, differentiable in ``q_c``, vmappable over
+    populations of ``q_c``)."""
+    q_c = jnp.asarray(q_c)
+    dq = jnp.asarray(dq, dtype=q_c.dtype)
+
+    def step(z, inputs):
+        d, first = inputs
+        z = jnp.where(first, jnp.zeros_like(z), z)
+        s = jnp.sign(d)
+        z = s + (z - s) * jnp.exp(-jnp.abs(d) / q_c)
+        return z, z
+
+    _, z = lax.scan(step, jnp.zeros(dq.shape[-1], q_c.dtype), (dq, jnp.asarray(start)))
+    return z
+
+
+_dahl_state = jax.jit(dahl_state)
+
+
+def presliding_state(q: Float[ArrayLike, "T n"], recording: ArrayLike | None,
+                     q_c: Float[ArrayLike, " n"]) -> Float[np.ndarray, "T n"]:
+    """:func:`dahl_state` of the positions ``q`` (time order; ``recording``: each
+    sample's recording or None) as a NumPy array."""
+    dq, start = increments(q, recording)
+    return np.asarray(_dahl_state(dq, start, np.asarray(q_c, dtype=float)))

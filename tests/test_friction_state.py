@@ -1,0 +1,178 @@
+"""Friction at rest: Dahl's presliding state integrated along the recording
+(:class:`sj.Presliding`). The state against an independent integration on a ten times
+finer grid, kept at rest and restarted per recording; a subset's columns are the whole
+recording's, taken; a simulated point-to-point plant's displacements and coefficients
+recovered from noisy torques and predicted better by the validation; the search
+problem's fitness against a plain least-squares fit; the command line's word."""
+
+from __future__ import annotations
+
+import json
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import sedsabso_jax as sj
+from sedsabso_jax.identification import PreslidingProblem, parse_friction
+from sedsabso_jax.identification._shapes import Samples
+
+QC, FP = np.array([0.01, 0.02, 0.04]), np.array([3.0, 2.0, 1.0])
+
+
+def point_to_point(n, moves=24, rate=100.0, seed=0, fine=10):
+    """Minimum-jerk moves between random targets, each followed by a rest, sampled at
+    ``fine`` times ``rate``: (q, qd, qdd, dt)."""
+    rng = np.random.default_rng(seed)
+    pieces, here = [], np.zeros(n)
+    for _ in range(moves):
+        target = rng.uniform(-1.0, 1.0, n)
+        s = np.linspace(0.0, 1.0, int(rng.uniform(0.8, 1.6) * rate * fine))
+        pieces.append(here + (target - here) * (10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5)[:, None])
+        pieces.append(np.repeat(target[None], int(rng.uniform(0.3, 0.8) * rate * fine), 0))
+        here = target
+    q = np.concatenate(pieces)
+    dt = 1.0 / (rate * fine)
+    qd = np.gradient(q, dt, axis=0)
+    qd[np.abs(qd) < 1e-12] = 0.0
+    return q, qd, np.gradient(qd, dt, axis=0), dt
+
+
+def dahl_loop(q, q_c):
+    """Dahl's state along ``q`` by a plain loop of the exact update (from z = 0)."""
+    z = np.zeros_like(q)
+    for k in range(1, len(q)):
+        s = np.sign(q[k] - q[k - 1])
+        z[k] = s + (z[k - 1] - s) * np.exp(-np.abs(q[k] - q[k - 1]) / q_c)
+    return z
+
+
+@pytest.fixture(scope="module")
+def plant():
+    """rs010n moving point to point (a third of the time at rest) with presliding friction
+    FP z(q; QC) integrated on a 1 kHz grid, sampled at 100 Hz, 1 % noise."""
+    robot = sj.robots.rs010n()
+    qf, qdf, qddf, dt = point_to_point(3)
+    z = dahl_loop(qf, QC)[::10]
+    q, qd, qdd = qf[::10], qdf[::10], qddf[::10]
+    t = np.arange(len(q)) * dt * 10
+    tau = sj.simulate_measurements(robot, q, qd, qdd, t).tau + FP * z
+    tau = tau + 0.01 * np.sqrt(np.mean(tau ** 2, 0)) * np.random.default_rng(1).standard_normal(
+        tau.shape)
+    return robot, sj.base_parameters(robot), sj.Measurements(t, q, qd, qdd, tau), z
+
+
+def test_the_state_is_dahls_kept_at_rest_and_restarted_per_recording(plant):
+    """The columns FP_j are z_j on joint j's row: the fine grid's state at the samples
+    (the update is exact while the direction holds within a sample), unchanged while the
+    joint stands still (and not zero: a torque held), from 0 again at a new recording."""
+    robot, base, data, z = plant
+    model = sj.TorqueModel.of(robot, (sj.Presliding(tuple(QC)),), base=base)
+    assert model.stateful and not model.nonlinear and model.names[-3:] == ("FP1", "FP2", "FP3")
+    Y = model.regressor(data.q, data.qd, data.qdd)
+    np.testing.assert_allclose(Y[:, np.arange(3), np.arange(3) + base.rank], z, atol=1e-9)
+    assert np.all(Y[:, [1, 2, 0], np.arange(3) + base.rank] == 0.0)  # own row only
+    rest = np.all(np.diff(data.q, axis=0) == 0.0, axis=1)
+    assert rest.mean() > 0.2 and np.all(z[1:][rest] == z[:-1][rest])
+    assert np.abs(z[1:][rest]).mean() > 0.5
+    recording = np.repeat([0, 1], [300, len(data.q) - 300])
+    Y2 = model.regressor(data.q, data.qd, data.qdd, recording)
+    np.testing.assert_allclose(Y2[300:, np.arange(3), np.arange(3) + base.rank],
+                               dahl_loop(data.q[300:], QC), atol=1e-12)
+
+
+def test_a_subset_reads_the_state_of_the_whole_recording(plant):
+    """Cross-validation's training and test samples: their rows (and predictions) are
+    the whole recording's, taken; a subset of a subset too."""
+    robot, base, data, _ = plant
+    model = sj.TorqueModel.of(robot, (sj.Presliding(0.02),), base=base)
+    samples = Samples(data.q, data.qd, data.qdd, data.tau)
+    whole = samples.rows(model)
+    keep = np.arange(len(data.q)) % 3 != 0
+    part = samples.subset(keep)
+    np.testing.assert_array_equal(part.rows(model), whole[keep])
+    inner = np.arange(keep.sum()) % 2 == 0
+    np.testing.assert_array_equal(part.subset(inner).rows(model), whole[keep][inner])
+    values = np.random.default_rng(0).standard_normal(model.dim)
+    np.testing.assert_allclose(part.predict(model, values), whole[keep] @ values)
+
+
+def test_the_plant_is_recovered_and_validated(plant):
+    """presliding:fit on the plant: each displacement q_c and coefficient FP within 10 %
+    (the displacements' standard deviations covering the error), and the phase folds
+    predict better with it than without."""
+    robot, base, data, _ = plant
+    model = sj.TorqueModel.of(robot, (sj.Presliding(fitted=True),), base=base)
+    fit = sj.identify(robot, data, sj.OLS(), model)
+    shapes = fit.settings["shapes"]
+    found = np.array([shapes[f"q_c{j + 1}"]["value"] for j in range(3)])
+    std = np.array([shapes[f"q_c{j + 1}"]["std"] for j in range(3)])
+    np.testing.assert_allclose(found, QC, rtol=0.1)
+    assert np.all(np.abs(found - QC) < 5 * std) and not any(s["at_bound"]
+                                                            for s in shapes.values())
+    np.testing.assert_allclose(fit.values[[fit.names.index(f"FP{j + 1}") for j in range(3)]],
+                               FP, rtol=0.1)
+    assert fit.model.friction == "viscous-coulomb+presliding:fit"
+    physical = sj.identify(robot, data, sj.PhysicallyConsistent(sj.OLS()), model)
+    urdf = physical.urdf()  # the coefficients and the displacements found, in a comment
+    assert "presliding:fit" in urdf and "FP3 = " in urdf and "q_c3 = " in urdf
+    plain = sj.cross_validate(robot, data, sj.OLS(), sj.TorqueModel.of(robot, base=base))
+    held = sj.cross_validate(robot, data, sj.OLS(), model)
+    assert held.score < 0.85 * plain.score
+
+
+def test_the_search_problem_is_the_least_squares_fit(plant):
+    """PreslidingProblem's loss at log q_c is the mean square residual of a plain
+    least-squares fit of the model with those q_c; vmapped over a population it is the
+    loss of each; its values predict the fit's torques; its residual's Jacobian (through
+    the scan) matches central differences; a subset's state is the whole recording's."""
+    robot, base, data, _ = plant
+    samples = Samples(data.q, data.qd, data.qdd, data.tau)
+    model = sj.TorqueModel.of(robot, (sj.Presliding(fitted=True),), base=base)
+    problem = PreslidingProblem.of(model, data)
+    u = np.log(np.array([0.015, 0.03, 0.02]))
+    Y = samples.rows(model.with_shapes(np.exp(u))).reshape(-1, model.dim)
+    x = np.linalg.lstsq(Y, data.tau.reshape(-1), rcond=None)[0]
+    r = Y @ x - data.tau.reshape(-1)
+    assert float(problem.loss(jnp.asarray(u))) == pytest.approx(np.mean(r ** 2), rel=1e-6)
+    assert problem.names == model.names
+    values = problem.solve(jnp.asarray(u))
+    np.testing.assert_allclose(problem.predict(jnp.asarray(u), values).reshape(-1), Y @ x,
+                               atol=1e-6 * np.abs(Y @ x).max())
+    population = jnp.asarray(u + np.random.default_rng(0).normal(0, 0.5, (5, 3)))
+    np.testing.assert_allclose(jax.vmap(problem.loss)(population),
+                               [problem.loss(p) for p in population], rtol=1e-9)
+    keep = np.arange(len(data.q)) % 4 != 1  # a subset: the whole recording's state, taken
+    part = PreslidingProblem.of(model, data, keep)
+    np.testing.assert_allclose(part.state(jnp.asarray(u)),
+                               problem.state(jnp.asarray(u))[keep], atol=0)
+    J = jax.jacfwd(problem.residual)(jnp.asarray(u))
+    h = 1e-5
+    fd = (problem.residual(jnp.asarray(u + h * np.eye(3)[1]))
+          - problem.residual(jnp.asarray(u - h * np.eye(3)[1]))) / (2 * h)
+    np.testing.assert_allclose(J[:, 1], fd, atol=1e-6 * np.abs(fd).max())
+
+
+def test_the_word_and_the_command(tmp_path, capsys, plant):
+    from sedsabso_jax.cli import main
+
+    assert parse_friction("offset+presliding:fit")[1] == sj.Presliding(fitted=True)
+    assert parse_friction("presliding:0.01,0.02,0.03")[0].text == "presliding:0.01,0.02,0.03"
+    assert sj.Presliding().text == "presliding"
+    robot, _, data, _ = plant
+    path = data.save(tmp_path / "d.npz")
+    out = tmp_path / "fit.json"
+    common = ["identify", "--robot", "rs010n", "--data", str(path), "--method", "OLS",
+              "--weights", "equal", "--no-physical", "--folds", "0"]
+    assert main([*common, "--friction", "presliding:fit", "--json", str(out)]) == 0
+    settings = json.loads(out.read_text())["settings"]
+    assert settings["friction"] == "viscous-coulomb+presliding:fit"
+    assert set(settings["shapes"]) == {"q_c1", "q_c2", "q_c3"}
+    for bad in ("presliding:0", "presliding:-1", "presliding:x", "presliding:0.1,0.2"):
+        bad_out = tmp_path / "bad.json"
+        capsys.readouterr()
+        assert main([*common, "--friction", bad, "--json", str(bad_out)]) == 2, bad
+        err = capsys.readouterr().err
+        assert len(err.strip().splitlines()) == 1 and "presliding" in err.lower(), err
+        assert not bad_out.exists()
