@@ -8,9 +8,9 @@ displacements ``q_c`` (one per joint), which enter through the state's recursion
 https://doi.org/10.1137/0710036): for a trial ``u = log q_c`` it integrates the state by a
 ``lax.scan`` over the samples, forms the normal equations of the columns that do not
 depend on ``u`` (``A``, formed once) beside the state's columns ``Z(u)`` (each joint's own
-row), solves them and returns the residual. :meth:`~PreslidingProblem.loss` is a fitness
-``f(u, args)`` for :func:`~sedsabso_jax.minimise` (SEDSABSO, LDWPSO, evosax strategies,
-vmapped over the population) and :meth:`~PreslidingProblem.residual` the residual vector
+row), solves them and returns the residual. :meth:`~PreslidingProblem.fitness` is a
+fitness ``f(u, problem)`` for :func:`~sedsabso_jax.minimise` (SEDSABSO, LDWPSO, evosax
+strategies, vmapped over the population) and :meth:`~PreslidingProblem.residual` the residual vector
 whose Jacobian (forward mode through the scan and the solve) an optimistix
 Levenberg-Marquardt reads. :meth:`~PreslidingProblem.predict` gives the torques of
 another recording (``of(..., values=...)``) with the values fitted here.
@@ -125,6 +125,12 @@ class PreslidingProblem(eqx.Module):
         return (self.A @ x[:d] + zw * x[d:] - self.tau).reshape(-1)
 
     def loss(self, u: Float[Array, " n"], args: object = None) -> Float[Array, ""]:
-        """The weighted residual's mean square at ``q_c = exp(u)``: a fitness
-        ``f(u, args)`` (``args`` unused) for :func:`~sedsabso_jax.minimise`."""
+        """The weighted residual's mean square at ``q_c = exp(u)`` (``args`` unused)."""
         return jnp.mean(self.residual(u) ** 2)
+
+    @staticmethod
+    def fitness(u: Float[Array, " n"], problem: PreslidingProblem) -> Float[Array, ""]:
+        """:meth:`loss` as a fitness ``f(u, args)`` whose ``args`` is the problem, for
+        :func:`~sedsabso_jax.minimise` (``args=problem``): the problem's arrays are then
+        the compiled run's arguments, not constants baked into it."""
+        return problem.loss(u)
