@@ -17,8 +17,10 @@ one).
 
 Typical output (2-core AMD EPYC, 2026-11-26; see the JSON for every seed)::
 
-    | data | optimiser | evaluations | train [%] | validated [%] | compile [s] | run [s] |
-    | TX40 | SEDSABSO | 1197 | ... |
+    | data | optimiser | seed | evaluations | fit [%] | validated [%] | compile s | run s |
+    | TX40 | no presliding term (OLS) | None | 1 | 1.6546 | 2.1155 | 0.00 | 0.00 |
+    | TX40 | LDWPSO | 0 | 1200 | 1.5326 | 1.3610 | 5.60 | 1.40 |
+    | TX40 | scipy TRF (JAX Jacobian) | None | 98 | 1.5325 | 1.3707 | 2.71 | 1.55 |
 """
 
 from __future__ import annotations
