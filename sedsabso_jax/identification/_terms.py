@@ -299,32 +299,46 @@ class LoadFriction(AbstractColumns):
     ``tau_load`` the model's own rigid-body torque (module docstring); ``FL_j >= 0``,
     dimensionless (N m of friction per N m transmitted). With ``viscous=True`` also
     ``FLV_j |tau_load_j| qd_j`` (s/rad). The coefficients are bilinear with the
-    rigid-body parameters: a fit iterates to the torque of its own parameters
-    (:func:`~._shapes.fit`)."""
+    rigid-body parameters; the fit (:func:`~._shapes.fit`) takes the load from a least-
+    squares fit of the model without this term, then fits the model with that load (two
+    linear fits); ``fixed_point=True`` goes on, fitting with the load of the last fit's
+    parameters until it settles (``load:fixed-point``; measured no better and 6-30 times
+    slower, :mod:`._shapes`)."""
 
     viscous: bool = False
+    fixed_point: bool = False
     name: ClassVar[str] = "load"
     nonnegative: ClassVar[bool] = True
+    #: The command line's options, ``load:viscous,fixed-point``.
+    options: ClassVar[tuple[str, ...]] = ("viscous", "fixed-point")
 
     def __check_init__(self):
-        if not isinstance(self.viscous, bool):
-            raise ValueError(f"LoadFriction's viscous must be True or False, got "
-                             f"{self.viscous!r}")
+        for field in ("viscous", "fixed_point"):
+            if not isinstance(getattr(self, field), bool):
+                raise ValueError(f"LoadFriction's {field} must be True or False, got "
+                                 f"{getattr(self, field)!r}")
 
     @property
     def needs_load(self) -> bool:
         return True
 
     @property
+    def settles_load(self) -> bool:
+        return self.fixed_point
+
+    @property
     def text(self) -> str:
-        return "load:viscous" if self.viscous else "load"
+        chosen = [o for o, on in zip(self.options, (self.viscous, self.fixed_point)) if on]
+        return "load" + (":" + ",".join(chosen) if chosen else "")
 
     @classmethod
     def parse(cls, option: str | None) -> AbstractTerm:
-        if option not in (None, "viscous"):
-            raise ValueError(f"friction term 'load': expected load or load:viscous, got "
+        words = [] if option is None else option.split(",")
+        if any(w not in cls.options for w in words) or len(set(words)) < len(words):
+            raise ValueError(f"friction term 'load': expected load, load:viscous, "
+                             f"load:fixed-point or load:viscous,fixed-point, got "
                              f"load:{option}")
-        return cls(viscous=option == "viscous")
+        return cls(viscous="viscous" in words, fixed_point="fixed-point" in words)
 
     def names(self, model: TorqueModelView) -> tuple[str, ...]:
         n = model.robot.n_joints
@@ -342,7 +356,7 @@ class LoadFriction(AbstractColumns):
         return np.concatenate(out, -1)
 
     def settings(self) -> dict:
-        return {"load_viscous": self.viscous}
+        return {"load_viscous": self.viscous, "load_fixed_point": self.fixed_point}
 
 
 #: The words of ``--friction``'s ``a+b`` text, in column order.
