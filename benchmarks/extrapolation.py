@@ -51,15 +51,51 @@ from benchmarks.device import device_info
 from benchmarks.output import to_json
 from sedsabso_jax.dynamics import joint_limits
 from sedsabso_jax.identification import ESTIMATOR_CANDIDATES, candidate_models
+from sedsabso_jax.identification._folds import not_worse
 from sedsabso_jax.measurements import DEFAULT_CUTOFF_HZ, differentiate
 
 RATE, DURATION = 100.0, 10.0  # the design's period; recordings are two periods
 SPEEDS = (1.0, 1.5, 2.0)
+#: The new motions each fit is judged on: the three other trajectories at each speed,
+#: and point-to-point motions with rests (:class:`PointToPoint`).
+MOTIONS = tuple(f"{s:g}x" for s in SPEEDS) + ("p2p",)
 #: Plants whose results chose the defaults; the others are held out.
 TUNED_ON = tuple(range(8))
 #: The default's validation, and the scores compared: it, and each of its two parts.
 DEFAULT = sj.Pooled((sj.PhaseFolds(), sj.SpeedSplits()))
 SCORES = ("pooled", "speed", "phase")
+#: The torque models of 0.5.0's default (before load-dependent friction), whose choice is
+#: made again among their rows to compare the defaults on the same fits.
+PREVIOUS_FRICTIONS = ("viscous-coulomb", "viscous-coulomb+offset",
+                      "viscous-coulomb+offset+armature",
+                      "viscous-coulomb+offset+quadratic+smooth")
+
+
+class PointToPoint:
+    """A point-to-point motion with rests: from the excitation's mean position to
+    ``moves`` random waypoints within the middle of each joint's excitation range, each
+    reached by a minimum-jerk move of ``move_s`` seconds, then held for ``rest_s``
+    seconds (the joints stand still, as on a pick-and-place cycle)."""
+
+    def __init__(self, trajectory: sj.FourierTrajectory, seed: int, moves: int = 8,
+                 move_s: float = 1.5, rest_s: float = 1.0):
+        times = np.arange(int(round(DURATION * RATE))) / RATE
+        q = np.asarray(trajectory(times)[0])
+        lo, hi = np.quantile(q, 0.2, axis=0), np.quantile(q, 0.8, axis=0)
+        rng = np.random.default_rng([seed, 7])
+        self.points = np.vstack([np.mean(q, 0), lo + (hi - lo) * rng.random((moves, q.shape[1]))])
+        self.move_s, self.rest_s = move_s, rest_s
+
+    def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        period = self.move_s + self.rest_s
+        k = np.minimum((t // period).astype(int), len(self.points) - 2)
+        u = np.clip((t - k * period) / self.move_s, 0.0, 1.0)[:, None]
+        dq = self.points[k + 1] - self.points[k]
+        s = 10 * u ** 3 - 15 * u ** 4 + 6 * u ** 5
+        sd = (30 * u ** 2 - 60 * u ** 3 + 30 * u ** 4) / self.move_s
+        sdd = (60 * u - 180 * u ** 2 + 120 * u ** 3) / self.move_s ** 2
+        moving = (t - k * period < self.move_s)[:, None]
+        return self.points[k] + s * dq, sd * dq * moving, sdd * dq * moving
 
 
 class Plant:
@@ -78,13 +114,16 @@ class Plant:
         self.noise = rng.uniform(0.002, 0.006)                          # of the limit
         self.position_noise = 2e-4                                      # rad
 
-    def record(self, trajectory: sj.FourierTrajectory, speed: float, seed: int
-               ) -> sj.Measurements:
+    def record(self, trajectory: sj.FourierTrajectory | PointToPoint, speed: float,
+               seed: int) -> sj.Measurements:
         times = np.arange(int(round(2 * DURATION * RATE))) / RATE
-        fast = sj.FourierTrajectory(np.asarray(trajectory.a) * speed,
-                                    np.asarray(trajectory.b) * speed,
-                                    np.asarray(trajectory.q0), trajectory.wf * speed)
-        q, qd, qdd = (np.asarray(x) for x in fast(times))
+        if isinstance(trajectory, PointToPoint):
+            q, qd, qdd = trajectory(times)
+        else:
+            fast = sj.FourierTrajectory(np.asarray(trajectory.a) * speed,
+                                        np.asarray(trajectory.b) * speed,
+                                        np.asarray(trajectory.q0), trajectory.wf * speed)
+            q, qd, qdd = (np.asarray(x) for x in fast(times))
         rng = np.random.default_rng([self.seed, seed])
         rigid = np.asarray(sj.inverse_dynamics(self.robot, self.robot.params, q, qd, qdd))
         friction = (np.sign(qd) * (self.fc + (self.fs - self.fc) * np.exp(-(qd / self.vs) ** 2))
@@ -111,7 +150,7 @@ def estimators() -> tuple[sj.Estimator, ...]:
                  for e in (base, sj.PhysicallyConsistent(base)))
 
 
-def study(plants: int) -> dict:
+def study(plants: int, loto: bool = False, only: list[int] | None = None) -> dict:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the KUKA URDF's duplicate <origin>
         robot = sj.robots.kuka_lwr4()
@@ -127,41 +166,50 @@ def study(plants: int) -> dict:
     common = dict(estimators=estimators(), models=candidate_models(robot, base=base),
                   limits=tau_max)
     results = []
-    for p in range(plants):
+    for p in range(plants) if only is None else only:
         t0 = time.perf_counter()
         plant = Plant(robot, tau_max, seed=p)
         data = plant.record(designs[p], 1.0, seed=0)
         others = range(plants, plants + 3)
-        new = {(t, s): plant.record(designs[t], s, seed=1 + 10 * t + int(10 * s))
+        new = {(f"{s:g}x", t): plant.record(designs[t], s, seed=1 + 10 * t + int(10 * s))
                for t in others for s in SPEEDS}
+        new.update({("p2p", t): plant.record(PointToPoint(designs[t], seed=p), 1.0,
+                                             seed=5 + 10 * t) for t in others})
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             # the default's validation, whose parts are the phase folds and speed splits
             one = sj.select_model(robot, data, validation=DEFAULT, **common)
-            four = [data] + [new[(t, s)] for t, s in zip(others, SPEEDS)]
-            pooled = sj.select_model(robot, four, validation=sj.Pooled(
-                (sj.RecordingFolds(), sj.PhaseFolds(), sj.SpeedSplits())), **common)
+            pooled = sj.select_model(robot, [data] + [new[(f"{s:g}x", t)] for t, s in zip(
+                others, SPEEDS)], validation=sj.Pooled(
+                (sj.RecordingFolds(), sj.PhaseFolds(), sj.SpeedSplits())),
+                **common) if loto else None
+        previous = choice([cv for _, cv in one.candidates], [
+            e.physical for e, _ in one.options], [
+            m.friction in PREVIOUS_FRICTIONS for _, m in one.options])
         rows = []
         for i, ((settings, cv), (estimator, model)) in enumerate(
                 zip(one.candidates, one.options)):
             fit = sj.identify(robot, data, estimator, model, limits=tau_max)
-            measured = {s: float(np.mean([_nrms(fit, m, tau_max) for (t, sp), m in new.items()
-                                          if sp == s])) for s in SPEEDS}
-            four_cv = pooled.candidates[i][1]
-            n_phase, n_speed = (four_cv.split_parts.count(k)
-                                for k in ("phase folds", "speed splits"))
-            parts = four_cv.part_scores
-            rows.append({"candidate": {**settings}, "n_parameters": cv.n_parameters,
-                         "pooled": cv.score, "phase": cv.part_scores["phase folds"],
-                         "speed": cv.part_scores["speed splits"],
-                         "loto": parts["recording folds"],
-                         "speed_pooled": parts["speed splits"],
-                         "phase_pooled": parts["phase folds"],
-                         "pooled_pooled": (n_phase * parts["phase folds"]
-                                           + n_speed * parts["speed splits"])
-                         / (n_phase + n_speed),
-                         **{f"new_{s:g}x": v for s, v in measured.items()},
-                         "chosen": settings is one.chosen})
+            measured = {k: float(np.mean([_nrms(fit, m, tau_max) for (kind, _), m
+                                          in new.items() if kind == k])) for k in MOTIONS}
+            row = {"candidate": {**settings}, "n_parameters": cv.n_parameters,
+                   "pooled": cv.score, "phase": cv.part_scores["phase folds"],
+                   "speed": cv.part_scores["speed splits"],
+                   **{f"new_{k}": v for k, v in measured.items()},
+                   "chosen": settings is one.chosen,
+                   "previous_chosen": i == previous}
+            if pooled is not None:
+                four_cv = pooled.candidates[i][1]
+                n_phase, n_speed = (four_cv.split_parts.count(k)
+                                    for k in ("phase folds", "speed splits"))
+                parts = four_cv.part_scores
+                row.update({"loto": parts["recording folds"],
+                            "speed_pooled": parts["speed splits"],
+                            "phase_pooled": parts["phase folds"],
+                            "pooled_pooled": (n_phase * parts["phase folds"]
+                                              + n_speed * parts["speed splits"])
+                            / (n_phase + n_speed)})
+            rows.append(row)
         results.append({"plant": p, "tuned_on": p in TUNED_ON, "rows": rows,
                         "summary": summarise(rows), "seconds": time.perf_counter() - t0})
         print(f"plant {p} ({results[-1]['seconds']:.0f} s): "
@@ -170,35 +218,50 @@ def study(plants: int) -> dict:
             "table": table(results)}
 
 
+def choice(cvs: list, physical: list[bool], among: list[bool]) -> int:
+    """The index the one-standard-error rule of :func:`sedsabso_jax.select_model` picks
+    among the candidates ``among`` marks (fewest parameters, then physically
+    consistent, then the earlier)."""
+    keep = [i for i in range(len(cvs)) if among[i]]
+    best = min((cvs[i] for i in keep), key=lambda cv: cv.score)
+    order = sorted(keep, key=lambda i: (cvs[i].n_parameters, not physical[i], i))
+    return next(i for i in order if not_worse(cvs[i], best))
+
+
 def summarise(rows: list[dict]) -> dict:
-    """Per score: Spearman's rho with the measured error at each speed and with LOTO; the
-    default's choice (``chosen``, the pooled score's one-standard-error rule) and the
-    other scores' lowest: predicted / measured, and the measured error over the best
-    candidate's."""
+    """Per score: Spearman's rho with the measured error on each kind of new motion (and
+    with LOTO where it ran); the choice (the pooled score's one-standard-error rule: the
+    default's, ``chosen``; the other scores' lowest):
+    predicted / measured, and the measured error over the best candidate's; and the
+    default's measured error over the previous default's (``over_previous``)."""
     out: dict = {}
-    measured = {s: np.array([r[f"new_{s:g}x"] for r in rows]) for s in SPEEDS}
-    loto = np.array([r["loto"] for r in rows])
+    measured = {k: np.array([r[f"new_{k}"] for r in rows]) for k in MOTIONS}
     chosen = next(i for i, r in enumerate(rows) if r["chosen"])
+    previous = next(i for i, r in enumerate(rows) if r["previous_chosen"])
     for score in SCORES:
         predicted = np.array([r[score] for r in rows])
-        lowest = int(np.argmin(predicted))
-        entry: dict = {"rho_loto_pooled": float(scipy.stats.spearmanr(
-            [r[f"{score}_pooled"] for r in rows], loto).statistic),
-            "rho_loto": float(scipy.stats.spearmanr(predicted, loto).statistic)}
-        for s, m in measured.items():
-            pick = chosen if score == "pooled" else lowest
-            entry[f"{s:g}x"] = {
+        pick = chosen if score == "pooled" else int(np.argmin(predicted))
+        entry: dict = {}
+        if "loto" in rows[0]:
+            loto = np.array([r["loto"] for r in rows])
+            entry["rho_loto_pooled"] = float(scipy.stats.spearmanr(
+                [r[f"{score}_pooled"] for r in rows], loto).statistic)
+        for k, m in measured.items():
+            entry[k] = {
                 "rho": float(scipy.stats.spearmanr(predicted, m).statistic),
                 "predicted_over_measured": float(predicted[pick] / m[pick]),
-                "chosen_over_best": float(m[pick] / m.min())}
+                "chosen_over_best": float(m[pick] / m.min()),
+                "over_previous": float(m[pick] / m[previous])}
         out[score] = entry
     return out
 
 
 def format_summary(summary: dict) -> str:
     return "; ".join(
-        f"{k}: rho LOTO {v['rho_loto_pooled']:.2f}, 2x rho {v['2x']['rho']:.2f} "
-        f"pred/meas {v['2x']['predicted_over_measured']:.2f}" for k, v in summary.items())
+        f"{k}: 2x rho {v['2x']['rho']:.2f} pred/meas {v['2x']['predicted_over_measured']:.2f}"
+        f" best {v['2x']['chosen_over_best']:.2f}, p2p pred/meas "
+        f"{v['p2p']['predicted_over_measured']:.2f} best {v['p2p']['chosen_over_best']:.2f}"
+        for k, v in summary.items())
 
 
 def table(results: list[dict]) -> list[dict]:
@@ -210,11 +273,12 @@ def table(results: list[dict]) -> list[dict]:
             continue
         for score in SCORES:
             row = {"plants": "held out" if held_out else "tuned on", "score": score}
-            values = {"rho_loto_pooled": [g[score]["rho_loto_pooled"] for g in group],
-                      "rho_loto": [g[score]["rho_loto"] for g in group]}
-            for s in SPEEDS:
-                for key in ("rho", "predicted_over_measured", "chosen_over_best"):
-                    values[f"{s:g}x {key}"] = [g[score][f"{s:g}x"][key] for g in group]
+            values = {k: [g[score][k] for g in group] for k in ("rho_loto_pooled",)
+                      if k in group[0][score]}
+            for s in MOTIONS:
+                for key in ("rho", "predicted_over_measured", "chosen_over_best",
+                            "over_previous"):
+                    values[f"{s} {key}"] = [g[score][s][key] for g in group]
             row.update({k: {"median": float(np.median(v)), "min": float(np.min(v)),
                             "max": float(np.max(v))} for k, v in values.items()})
             out.append(row)
@@ -225,12 +289,18 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--plants", type=int, default=16)
     parser.add_argument("--json", default=None)
+    parser.add_argument("--loto", action="store_true",
+                        help="also leave one trajectory out over four recordings (slow)")
+    parser.add_argument("--only", type=int, nargs="+", default=None,
+                        help="run these plants only (the designs stay those of --plants)")
     args = parser.parse_args(argv)
     jax.config.update("jax_enable_x64", True)
-    found = study(args.plants)
+    found = study(args.plants, args.loto, args.only)
     found["device"] = device_info()
     found["command"] = ("python -m benchmarks.extrapolation --plants "
-                        f"{args.plants}" + (f" --json {args.json}" if args.json else ""))
+                        f"{args.plants}" + " --loto" * args.loto
+                        + (" --only " + " ".join(map(str, args.only)) if args.only else "")
+                        + (f" --json {args.json}" if args.json else ""))
     for row in found["table"]:
         print(row["plants"], row["score"], " ".join(
             f"{k}={v['median']:.2f}({v['min']:.2f}-{v['max']:.2f})" for k, v in row.items()

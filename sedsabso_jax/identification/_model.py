@@ -43,6 +43,7 @@ from ._term_base import AbstractTerm, Shapes, Signals
 from ._terms import (
     Armature,
     CoupledMotorFriction,
+    LoadFriction,
     Offset,
     Quadratic,
     SmoothCoulomb,
@@ -51,9 +52,16 @@ from ._terms import (
 )
 
 #: The candidate torque models of :func:`~._validation.select_model` (terms beyond the
-#: base regressor's viscous and Coulomb friction), simplest first.
+#: base regressor's viscous and Coulomb friction), simplest first. Since 0.6.0 each has
+#: Coulomb friction without the jump at rest (:class:`~._terms.SmoothCoulomb`: with
+#: velocities derived from noisy positions, ``sign(qd)`` flips at random on a joint that
+#: stands still, which doubled the error on point-to-point motions with rests in the
+#: simulation study, docs/results/extrapolation.md), and Coulomb friction growing with
+#: the load is a candidate, alone and with armature.
 FRICTION_CANDIDATES: tuple[tuple[AbstractTerm, ...], ...] = (
-    (), (Offset(),), (Offset(), Armature()), (Offset(), Quadratic(), SmoothCoulomb()))
+    (SmoothCoulomb(),), (Offset(), SmoothCoulomb()), (Offset(), Armature(), SmoothCoulomb()),
+    (Offset(), Quadratic(), SmoothCoulomb()), (Offset(), SmoothCoulomb(), LoadFriction()),
+    (Offset(), Armature(), SmoothCoulomb(), LoadFriction()))
 
 
 def _matrix(transmission: object) -> object:
@@ -241,6 +249,12 @@ class TorqueModel(eqx.Module):
         return any(term.stateful for term in self.terms)
 
     @property
+    def load_fixed_point(self) -> bool:
+        """Whether the load-dependent friction's fit goes on to a fixed point
+        (:class:`~._terms.LoadFriction`'s ``fixed_point``)."""
+        return any(term.settles_load for term in self.terms)
+
+    @property
     def rigid_columns(self) -> np.ndarray:
         """The base columns of the rigid body: all but each joint's viscous and Coulomb
         friction (which never regroup)."""
@@ -340,7 +354,9 @@ def candidate_models(robot: Robot,
     :class:`~._terms.CoupledMotorFriction` where ``transmission`` couples a motor, with
     one :class:`~._terms.Offset` per recording for ``recordings > 1``, the base
     parameters computed once (``base``: given), and each model once (``()`` and
-    ``(Offset(),)`` are one model with offsets per recording)."""
+    ``(Offset(),)`` are one model with offsets per recording). Where the smooth Coulomb
+    term does not apply (a joint's Coulomb column regroups with other base columns),
+    the default candidates keep the jump."""
     if base is None:
         base = base_parameters(robot)
     K = _matrix(transmission)
@@ -350,8 +366,11 @@ def candidate_models(robot: Robot,
         terms = tuple(terms)
         added = ((CoupledMotorFriction(),) if coupled else ()) + (
             (Offset(),) if recordings > 1 else ())
-        model = TorqueModel.of(robot, terms + tuple(t for t in added if t not in terms),
-                               transmission=transmission, base=base, recordings=recordings)
+        terms += tuple(t for t in added if t not in terms)
+        if frictions is FRICTION_CANDIDATES and None in base.joint_columns("FC"):
+            terms = tuple(t for t in terms if not isinstance(t, SmoothCoulomb))
+        model = TorqueModel.of(robot, terms, transmission=transmission, base=base,
+                               recordings=recordings)
         if all(m.friction != model.friction for m in models):
             models.append(model)
     return tuple(models)

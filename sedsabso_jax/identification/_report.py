@@ -80,7 +80,8 @@ def model_units(names: Sequence[str]) -> str:
 
 def shapes_lines(settings: dict) -> list[str]:
     """What the fit found of a model that is not linear: the velocity scales it searched
-    (value, standard deviation, on a bound) and whether the load's fixed point settled."""
+    (value, standard deviation, on a bound) and where the load came from (a first fit, or
+    a fixed point: whether it settled)."""
     lines = []
     shapes = settings.get("shapes") or {}
     if shapes:
@@ -92,9 +93,13 @@ def shapes_lines(settings: dict) -> list[str]:
         lines.append(f"velocity scales searched [rad/s]: {found}")
     load = settings.get("load")
     if load:
-        state = "settled" if load["settled"] else "NOT settled"
-        lines.append(f"friction growing with the load: the fit's own rigid-body torque after "
-                     f"{load['iterations']} fits ({state})")
+        if "settled" in load:
+            state = "settled" if load["settled"] else "NOT settled"
+            lines.append(f"friction growing with the load: the fit's own rigid-body torque "
+                         f"after {load['iterations']} fits ({state})")
+        else:
+            lines.append("friction growing with the load: the rigid-body torque of a least-"
+                         "squares fit without it")
     return ["", *lines] if lines else []
 
 

@@ -102,6 +102,11 @@ class AbstractTerm(eqx.Module):
         return False
 
     @property
+    def settles_load(self) -> bool:
+        """Whether a fit iterates the load to a fixed point (:mod:`._shapes`)."""
+        return False
+
+    @property
     def text(self) -> str:
         """The term in the command line's ``--friction`` text (``name[:option]``)."""
         return self.name

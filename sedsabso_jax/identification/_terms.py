@@ -36,19 +36,16 @@ the order of its columns). :func:`parse_friction` reads that text, once, at the 
 
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 import abc
-import dataclasses
 from typing import ClassVar
 
 import equinox as eqx
 import numpy as np
 
-from ._friction_state import presliding_state
-from ._scales import AbstractVelocityScale, as_scale, check_scale, per_joint
+from ._scales import AbstractVelocityScale, as_scale
 from ._term_base import (
     TERMS,
     AbstractColumns,
     AbstractTerm,
-    Shapes,
     Signals,
     TorqueModelView,
     diagonal,
@@ -61,8 +58,6 @@ BASE_FRICTION = "viscous-coulomb"
 SMOOTH_VELOCITY = 0.02
 #: Stribeck velocity (rad/s or m/s) of :class:`Stribeck` unless told.
 STRIBECK_VELOCITY = 0.1
-#: Characteristic displacement (rad or m) of :class:`Presliding` unless told.
-PRESLIDING_DISPLACEMENT = 0.002
 
 class Offset(AbstractColumns):
     """``OFF_j``: a constant torque per joint (a torque sensor's zero). With a model of
@@ -227,32 +222,46 @@ class LoadFriction(AbstractColumns):
     ``tau_load`` the model's own rigid-body torque (module docstring); ``FL_j >= 0``,
     dimensionless (N m of friction per N m transmitted). With ``viscous=True`` also
     ``FLV_j |tau_load_j| qd_j`` (s/rad). The coefficients are bilinear with the
-    rigid-body parameters: a fit iterates to the torque of its own parameters
-    (:func:`~._shapes.fit`)."""
+    rigid-body parameters; the fit (:func:`~._shapes.fit`) takes the load from a least-
+    squares fit of the model without this term, then fits the model with that load (two
+    linear fits); ``fixed_point=True`` goes on, fitting with the load of the last fit's
+    parameters until it settles (``load:fixed-point``; measured no better and 6-30 times
+    slower, :mod:`._shapes`)."""
 
     viscous: bool = False
+    fixed_point: bool = False
     name: ClassVar[str] = "load"
     nonnegative: ClassVar[bool] = True
+    #: The command line's options, ``load:viscous,fixed-point``.
+    options: ClassVar[tuple[str, ...]] = ("viscous", "fixed-point")
 
     def __check_init__(self):
-        if not isinstance(self.viscous, bool):
-            raise ValueError(f"LoadFriction's viscous must be True or False, got "
-                             f"{self.viscous!r}")
+        for field in ("viscous", "fixed_point"):
+            if not isinstance(getattr(self, field), bool):
+                raise ValueError(f"LoadFriction's {field} must be True or False, got "
+                                 f"{getattr(self, field)!r}")
 
     @property
     def needs_load(self) -> bool:
         return True
 
     @property
+    def settles_load(self) -> bool:
+        return self.fixed_point
+
+    @property
     def text(self) -> str:
-        return "load:viscous" if self.viscous else "load"
+        chosen = [o for o, on in zip(self.options, (self.viscous, self.fixed_point)) if on]
+        return "load" + (":" + ",".join(chosen) if chosen else "")
 
     @classmethod
     def parse(cls, option: str | None) -> AbstractTerm:
-        if option not in (None, "viscous"):
-            raise ValueError(f"friction term 'load': expected load or load:viscous, got "
+        words = [] if option is None else option.split(",")
+        if any(w not in cls.options for w in words) or len(set(words)) < len(words):
+            raise ValueError(f"friction term 'load': expected load, load:viscous, "
+                             f"load:fixed-point or load:viscous,fixed-point, got "
                              f"load:{option}")
-        return cls(viscous=option == "viscous")
+        return cls(viscous="viscous" in words, fixed_point="fixed-point" in words)
 
     def names(self, model: TorqueModelView) -> tuple[str, ...]:
         n = model.robot.n_joints
@@ -270,94 +279,11 @@ class LoadFriction(AbstractColumns):
         return np.concatenate(out, -1)
 
     def settings(self) -> dict:
-        return {"load_viscous": self.viscous}
+        return {"load_viscous": self.viscous, "load_fixed_point": self.fixed_point}
 
 
-class Presliding(AbstractTerm):
-    """``FP_j z_j``: friction that a joint holds at rest and after a reversal builds up
-    over a displacement, Dahl's model (:mod:`._friction_state`): ``z_j`` the presliding
-    state, integrated along the recorded positions (``dz/dq = (1 - z sign(qd)) / q_c``),
-    ``FP_j >= 0`` (N m or N) the friction it saturates at. Beside the Coulomb column
-    ``FC_j sign(qd_j)``, which it equals in steady sliding, it adds what sliding friction
-    does not predict: the torque held while the joint stands still and the gradual
-    reversal. ``displacement`` is ``q_c`` (rad or m, > 0: one, one per joint, or with
-    ``fitted=True`` one per joint searched by the fit within :attr:`bounds`). The columns
-    need each recording's samples in time order (:attr:`stateful`)."""
-
-    displacement: float | tuple[float, ...] = eqx.field(default=PRESLIDING_DISPLACEMENT,
-                                                        converter=as_scale)
-    fitted: bool = False
-    name: ClassVar[str] = "presliding"
-    nonnegative: ClassVar[bool] = True
-    #: The displacements' search box (rad or m).
-    bounds: ClassVar[tuple[float, float]] = (1e-5, 0.5)
-
-    def __check_init__(self):
-        check_scale("Presliding's displacement", self.displacement)
-        if not isinstance(self.fitted, bool):
-            raise ValueError(f"Presliding's fitted must be True or False, got {self.fitted!r}")
-
-    @property
-    def stateful(self) -> bool:
-        return True
-
-    def per_joint(self, n: int) -> np.ndarray:
-        """The displacement ``q_c`` of each of ``n`` joints."""
-        return per_joint("presliding's displacement", self.displacement, n)
-
-    def names(self, model: TorqueModelView) -> tuple[str, ...]:
-        n = model.robot.n_joints
-        self.per_joint(n)
-        return tuple(f"FP{j + 1}" for j in range(n))
-
-    def columns(self, model: TorqueModelView, s: Signals) -> np.ndarray:
-        n = model.robot.n_joints
-        z = presliding_state(s.q, s.recording, self.per_joint(n))
-        return diagonal(z, s.q.shape[:-1], n)
-
-    def coulomb(self, qd: np.ndarray) -> None:
-        return None
-
-    @property
-    def text(self) -> str:
-        d = self.displacement
-        if self.fitted:
-            return "presliding:fit"
-        if d == PRESLIDING_DISPLACEMENT:
-            return "presliding"
-        return "presliding:" + (f"{d:g}" if isinstance(d, float) else ",".join(f"{v:g}"
-                                                                               for v in d))
-
-    @classmethod
-    def parse(cls, option: str | None) -> AbstractTerm:
-        if option is None or option == "fit":
-            return cls(fitted=option == "fit")
-        try:
-            values = [float(v) for v in option.split(",")]
-        except ValueError:
-            raise ValueError(f"friction term 'presliding': expected presliding:fit or "
-                             f"presliding:DISPLACEMENT (rad or m, one or one per joint, "
-                             f"comma-separated), got presliding:{option}") from None
-        return cls(values[0] if len(values) == 1 else tuple(values))
-
-    def shapes(self, model: TorqueModelView) -> Shapes | None:
-        if not self.fitted:
-            return None
-        n = model.robot.n_joints
-        lo, hi = self.bounds
-        return Shapes(tuple(f"q_c{j + 1}" for j in range(n)),
-                      np.clip(self.per_joint(n), lo, hi), np.full(n, lo), np.full(n, hi))
-
-    def with_shapes(self, values: np.ndarray) -> AbstractTerm:
-        return dataclasses.replace(self, displacement=tuple(float(v) for v in values))
-
-    def settings(self) -> dict:
-        d = self.displacement
-        out: dict = {"presliding_displacement": list(d) if isinstance(d, tuple) else d}
-        if self.fitted:
-            out["presliding_fitted"] = True
-        return out
-
+# After LoadFriction: a term's place in the registry is the order of its columns.
+from ._presliding import PRESLIDING_DISPLACEMENT, Presliding  # noqa: E402, F401
 
 #: The words of ``--friction``'s ``a+b`` text, in column order.
 FRICTION_TERMS = (BASE_FRICTION, *TERMS)
