@@ -50,8 +50,11 @@ import sedsabso_jax as sj
 from benchmarks.device import device_info
 from benchmarks.output import to_json
 from sedsabso_jax.dynamics import joint_limits
-from sedsabso_jax.identification import ESTIMATOR_CANDIDATES, candidate_models
-from sedsabso_jax.identification._folds import not_worse
+from sedsabso_jax.identification import (
+    ESTIMATOR_CANDIDATES,
+    candidate_models,
+    simplest_not_worse,
+)
 from sedsabso_jax.measurements import DEFAULT_CUTOFF_HZ, differentiate
 
 RATE, DURATION = 100.0, 10.0  # the design's period; recordings are two periods
@@ -64,11 +67,17 @@ TUNED_ON = tuple(range(8))
 #: The default's validation, and the scores compared: it, and each of its two parts.
 DEFAULT = sj.Pooled((sj.PhaseFolds(), sj.SpeedSplits()))
 SCORES = ("pooled", "speed", "phase")
-#: The torque models of 0.5.0's default (before load-dependent friction), whose choice is
-#: made again among their rows to compare the defaults on the same fits.
-PREVIOUS_FRICTIONS = ("viscous-coulomb", "viscous-coulomb+offset",
-                      "viscous-coulomb+offset+armature",
-                      "viscous-coulomb+offset+quadratic+smooth")
+#: A validation whose speed splits extrapolate further (fit below half of each joint's
+#: peak speed, predict above 0.8 of it: up to 2x), tried in place of the default's.
+FAR = sj.Pooled((sj.PhaseFolds(), sj.SpeedSplits(fit_below=0.5, predict_above=0.8)))
+#: The torque models of 0.5.0's default, fitted beside the default's own so that its
+#: choice (made again among their rows) is compared on the same plants and motions.
+PREVIOUS_FRICTIONS = ((), (sj.Offset(),), (sj.Offset(), sj.Armature()),
+                      (sj.Offset(), sj.Quadratic(), sj.SmoothCoulomb()))
+#: The choices compared: the rule's pick among the default's candidates by the default's
+#: validation (``default``) and by :data:`FAR` (``far``), and among 0.5.0's
+#: (``previous``).
+CHOICES = ("default", "far", "previous")
 
 
 class PointToPoint:
@@ -163,8 +172,11 @@ def study(plants: int, loto: bool = False, only: list[int] | None = None) -> dic
                                     duration=DURATION, rate=RATE).trajectory
                for seed in range(plants + 3)]
     design_s = time.perf_counter() - start
-    common = dict(estimators=estimators(), models=candidate_models(robot, base=base),
-                  limits=tau_max)
+    models = candidate_models(robot, base=base)
+    previous_models = candidate_models(robot, PREVIOUS_FRICTIONS, base=base)
+    defaults = {m.friction for m in models}
+    union = models + tuple(m for m in previous_models if m.friction not in defaults)
+    common = dict(estimators=estimators(), limits=tau_max)
     results = []
     for p in range(plants) if only is None else only:
         t0 = time.perf_counter()
@@ -178,14 +190,20 @@ def study(plants: int, loto: bool = False, only: list[int] | None = None) -> dic
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             # the default's validation, whose parts are the phase folds and speed splits
-            one = sj.select_model(robot, data, validation=DEFAULT, **common)
+            one = sj.select_model(robot, data, validation=DEFAULT, models=union, **common)
+            far = sj.select_model(robot, data, validation=FAR, models=models, **common)
             pooled = sj.select_model(robot, [data] + [new[(f"{s:g}x", t)] for t, s in zip(
                 others, SPEEDS)], validation=sj.Pooled(
                 (sj.RecordingFolds(), sj.PhaseFolds(), sj.SpeedSplits())),
-                **common) if loto else None
-        previous = choice([cv for _, cv in one.candidates], [
-            e.physical for e, _ in one.options], [
-            m.friction in PREVIOUS_FRICTIONS for _, m in one.options])
+                models=models, **common) if loto else None
+        cvs = [cv for _, cv in one.candidates]
+        physical = [e.physical for e, _ in one.options]
+        in_default = [m.friction in defaults for _, m in one.options]
+        picks = {"default": choice(cvs, physical, in_default),
+                 "far": next(i for i, (s, _) in enumerate(far.candidates) if s is far.chosen),
+                 "previous": choice(cvs, physical, [
+                     m.friction in {x.friction for x in previous_models}
+                     for _, m in one.options])}
         rows = []
         for i, ((settings, cv), (estimator, model)) in enumerate(
                 zip(one.candidates, one.options)):
@@ -193,12 +211,14 @@ def study(plants: int, loto: bool = False, only: list[int] | None = None) -> dic
             measured = {k: float(np.mean([_nrms(fit, m, tau_max) for (kind, _), m
                                           in new.items() if kind == k])) for k in MOTIONS}
             row = {"candidate": {**settings}, "n_parameters": cv.n_parameters,
+                   "default_candidate": in_default[i],
                    "pooled": cv.score, "phase": cv.part_scores["phase folds"],
                    "speed": cv.part_scores["speed splits"],
                    **{f"new_{k}": v for k, v in measured.items()},
-                   "chosen": settings is one.chosen,
-                   "previous_chosen": i == previous}
-            if pooled is not None:
+                   **{f"{c}_chosen": i == picks[c] for c in CHOICES}}
+            if in_default[i]:  # the default's candidates come first, in far's order
+                row["far"] = far.candidates[i][1].score
+            if pooled is not None and in_default[i]:
                 four_cv = pooled.candidates[i][1]
                 n_phase, n_speed = (four_cv.split_parts.count(k)
                                     for k in ("phase folds", "speed splits"))
@@ -219,70 +239,75 @@ def study(plants: int, loto: bool = False, only: list[int] | None = None) -> dic
 
 
 def choice(cvs: list, physical: list[bool], among: list[bool]) -> int:
-    """The index the one-standard-error rule of :func:`sedsabso_jax.select_model` picks
-    among the candidates ``among`` marks (fewest parameters, then physically
-    consistent, then the earlier)."""
+    """The index the default's one-standard-error rule picks among the candidates
+    ``among`` marks."""
     keep = [i for i in range(len(cvs)) if among[i]]
-    best = min((cvs[i] for i in keep), key=lambda cv: cv.score)
-    order = sorted(keep, key=lambda i: (cvs[i].n_parameters, not physical[i], i))
-    return next(i for i in order if not_worse(cvs[i], best))
+    return keep[simplest_not_worse([cvs[i] for i in keep], [physical[i] for i in keep])]
 
 
 def summarise(rows: list[dict]) -> dict:
-    """Per score: Spearman's rho with the measured error on each kind of new motion (and
-    with LOTO where it ran); the choice (the pooled score's one-standard-error rule: the
-    default's, ``chosen``; the other scores' lowest):
-    predicted / measured, and the measured error over the best candidate's; and the
-    default's measured error over the previous default's (``over_previous``)."""
+    """Among the default's candidates, per score: Spearman's rho with the measured error
+    on each kind of new motion (and with LOTO where it ran). Per choice
+    (:data:`CHOICES`), on each kind of new motion: its predicted / measured error (the
+    prediction: the score it was chosen by; the previous default's, the default
+    validation's), its measured error over the best of the default's candidates and
+    over the previous default's choice."""
     out: dict = {}
-    measured = {k: np.array([r[f"new_{k}"] for r in rows]) for k in MOTIONS}
-    chosen = next(i for i, r in enumerate(rows) if r["chosen"])
-    previous = next(i for i, r in enumerate(rows) if r["previous_chosen"])
+    default = [r for r in rows if r["default_candidate"]]
+    measured = {k: np.array([r[f"new_{k}"] for r in default]) for k in MOTIONS}
     for score in SCORES:
-        predicted = np.array([r[score] for r in rows])
-        pick = chosen if score == "pooled" else int(np.argmin(predicted))
-        entry: dict = {}
-        if "loto" in rows[0]:
-            loto = np.array([r["loto"] for r in rows])
-            entry["rho_loto_pooled"] = float(scipy.stats.spearmanr(
-                [r[f"{score}_pooled"] for r in rows], loto).statistic)
-        for k, m in measured.items():
-            entry[k] = {
-                "rho": float(scipy.stats.spearmanr(predicted, m).statistic),
-                "predicted_over_measured": float(predicted[pick] / m[pick]),
-                "chosen_over_best": float(m[pick] / m.min()),
-                "over_previous": float(m[pick] / m[previous])}
-        out[score] = entry
+        predicted = np.array([r[score] for r in default])
+        entry: dict = {k: float(scipy.stats.spearmanr(predicted, m).statistic)
+                       for k, m in measured.items()}
+        if "loto" in default[0]:
+            entry["loto_pooled"] = float(scipy.stats.spearmanr(
+                [r[f"{score}_pooled"] for r in default],
+                [r["loto"] for r in default]).statistic)
+        out[f"rho_{score}"] = entry
+    previous = next(r for r in rows if r["previous_chosen"])
+    for c in CHOICES:
+        pick = next(r for r in rows if r[f"{c}_chosen"])
+        score = pick["far" if c == "far" else "pooled"]
+        out[c] = {k: {"predicted_over_measured": score / pick[f"new_{k}"],
+                      "chosen_over_best": pick[f"new_{k}"] / m.min(),
+                      "over_previous": pick[f"new_{k}"] / previous[f"new_{k}"]}
+                  for k, m in measured.items()}
+        out[c]["friction"] = pick["candidate"]["friction"]
     return out
 
 
 def format_summary(summary: dict) -> str:
     return "; ".join(
-        f"{k}: 2x rho {v['2x']['rho']:.2f} pred/meas {v['2x']['predicted_over_measured']:.2f}"
-        f" best {v['2x']['chosen_over_best']:.2f}, p2p pred/meas "
-        f"{v['p2p']['predicted_over_measured']:.2f} best {v['p2p']['chosen_over_best']:.2f}"
-        for k, v in summary.items())
+        f"{c} {summary[c]['friction'][16:]}: " + ", ".join(
+            f"{k} {v['chosen_over_best']:.2f}/{v['predicted_over_measured']:.2f}"
+            for k, v in summary[c].items() if k != "friction") for c in CHOICES)
 
 
 def table(results: list[dict]) -> list[dict]:
-    """Median (min-max) over the plants, separately for those tuned on and held out."""
+    """Median (min-max) over the plants, separately for those tuned on and held out:
+    per choice and kind of new motion, chosen over best, predicted over measured and
+    over the previous default's; per score, its rank correlations."""
     out = []
     for held_out in (False, True):
         group = [r["summary"] for r in results if r["tuned_on"] != held_out]
         if not group:
             continue
+        label = "held out" if held_out else "tuned on"
+        for c in CHOICES:
+            values = {f"{k} {key}": [g[c][k][key] for g in group] for k in MOTIONS
+                      for key in ("chosen_over_best", "predicted_over_measured",
+                                  "over_previous")}
+            out.append({"plants": label, "choice": c, **_spread(values)})
         for score in SCORES:
-            row = {"plants": "held out" if held_out else "tuned on", "score": score}
-            values = {k: [g[score][k] for g in group] for k in ("rho_loto_pooled",)
-                      if k in group[0][score]}
-            for s in MOTIONS:
-                for key in ("rho", "predicted_over_measured", "chosen_over_best",
-                            "over_previous"):
-                    values[f"{s} {key}"] = [g[score][s][key] for g in group]
-            row.update({k: {"median": float(np.median(v)), "min": float(np.min(v)),
-                            "max": float(np.max(v))} for k, v in values.items()})
-            out.append(row)
+            values = {k: [g[f"rho_{score}"][k] for g in group]
+                      for k in group[0][f"rho_{score}"]}
+            out.append({"plants": label, "rho": score, **_spread(values)})
     return out
+
+
+def _spread(values: dict) -> dict:
+    return {k: {"median": float(np.median(v)), "min": float(np.min(v)),
+                "max": float(np.max(v))} for k, v in values.items()}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -302,7 +327,7 @@ def main(argv: list[str] | None = None) -> None:
                         + (" --only " + " ".join(map(str, args.only)) if args.only else "")
                         + (f" --json {args.json}" if args.json else ""))
     for row in found["table"]:
-        print(row["plants"], row["score"], " ".join(
+        print(row["plants"], row.get("choice", row.get("rho")), " ".join(
             f"{k}={v['median']:.2f}({v['min']:.2f}-{v['max']:.2f})" for k, v in row.items()
             if isinstance(v, dict)))
     if args.json:

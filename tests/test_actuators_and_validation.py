@@ -151,8 +151,9 @@ def test_phase_folds_follow_the_repeat_period():
 
 def test_selection_finds_the_torque_offset_and_rejects_extra_terms(rng):
     """Simulated RS010N torques with a constant offset per joint and noise: the offset is
-    chosen (cross-validated error far below without it) and the quadratic/smooth/armature
-    terms, which the data do not contain, are not (one-standard-error rule)."""
+    chosen (cross-validated error far below without it) and the quadratic, armature and
+    load terms, which the data do not contain, are not (one-standard-error rule; every
+    default candidate's Coulomb friction is smooth)."""
     robot = sj.robots.rs010n()
     traj = sj.FourierTrajectory(rng.uniform(-0.3, 0.3, (3, 4)), rng.uniform(-0.3, 0.3, (3, 4)),
                                 np.zeros(3), wf=2 * np.pi / 10)
@@ -161,15 +162,15 @@ def test_selection_finds_the_torque_offset_and_rejects_extra_terms(rng):
     tau = data.tau + np.array([5.0, -3.0, 2.0])
     recording = (t, data.q, data.qd, data.qdd, tau)
     sel = select_model(robot, recording, estimators=sj.OLS())
-    assert sel.chosen["friction"] == "viscous-coulomb+offset"
-    assert sel.model.friction == "viscous-coulomb+offset" and sel.estimator == sj.OLS()
+    assert sel.chosen["friction"] == "viscous-coulomb+offset+smooth"
+    assert sel.model.friction == "viscous-coulomb+offset+smooth" and sel.estimator == sj.OLS()
     assert sel.cross_validation is dict(
-        (s["friction"], cv) for s, cv in sel.candidates)["viscous-coulomb+offset"]
+        (s["friction"], cv) for s, cv in sel.candidates)["viscous-coulomb+offset+smooth"]
     scores = {s["friction"]: cv for s, cv in sel.candidates}
-    assert scores["viscous-coulomb+offset"].score < 0.5 * scores["viscous-coulomb"].score
-    assert scores["viscous-coulomb+offset"].period_s == pytest.approx(10.0, abs=0.05)
+    assert scores["viscous-coulomb+offset+smooth"].score < 0.5 * scores["viscous-coulomb+smooth"].score
+    assert scores["viscous-coulomb+offset+smooth"].period_s == pytest.approx(10.0, abs=0.05)
     cv = cross_validate(robot, recording, sj.OLS(), sel.model, validation=sj.PhaseFolds(5))
-    assert cv.score == pytest.approx(scores["viscous-coulomb+offset"].score)
+    assert cv.score == pytest.approx(scores["viscous-coulomb+offset+smooth"].score)
     assert cv.measure == "relative_rms_percent" and len(cv.fold_scores) == 5
     assert 0.8 < cv.score < 1.5  # about the 1 % noise: the model generalises
     with pytest.raises(ValueError, match="fold labels must be integers"):

@@ -550,7 +550,7 @@ def test_offsets_per_recording(rs010n, rng):
         model.regressor(q, qd, qdd, np.array([0, 1, 2, 0]))
 
 
-def test_parse_friction_reads_the_command_lines_text():
+def test_parse_friction_reads_the_command_lines_text(rs010n):
     assert parse_friction("viscous-coulomb") == ()
     assert parse_friction("quadratic+viscous-coulomb+offset") == (Offset(), Quadratic())
     assert parse_friction("offset+smooth+offset") == (Offset(), SmoothCoulomb())
@@ -562,8 +562,9 @@ def test_parse_friction_reads_the_command_lines_text():
                         ("offset:2", r"^friction term 'offset' takes no option, got offset:2$"),
                         ("smooth:fast", r"^friction term 'smooth': expected smooth:fit or "
                                         r"smooth:VELOCITY"),
-                        ("load:quadratic", r"^friction term 'load': expected load or "
-                                           r"load:viscous, got load:quadratic$"),
+                        ("load:quadratic", r"^friction term 'load': expected load, "
+                                           r"load:viscous, load:fixed-point or "
+                                           r"load:viscous,fixed-point, got load:quadratic$"),
                         ("smooth:-1", r"SmoothCoulomb's velocity must be a number > 0"),
                         ("", "^friction must be a string of terms joined by '\\+'"),
                         (None, "^friction must be a string")]:
@@ -575,6 +576,12 @@ def test_parse_friction_reads_the_command_lines_text():
     assert parse_friction("smooth:fit+stribeck:0.05+load:viscous") == (
         SmoothCoulomb(fitted=True), sj.Stribeck(0.05), sj.LoadFriction(viscous=True))
     assert parse_friction("smooth:0.1,0.2,0.3") == (SmoothCoulomb((0.1, 0.2, 0.3)),)
+    both = parse_friction("load:viscous,fixed-point")
+    assert both == (sj.LoadFriction(viscous=True, fixed_point=True),)
+    assert sj.TorqueModel.of(rs010n[0], both, base=rs010n[1]).friction == (
+        "viscous-coulomb+load:viscous,fixed-point")
+    with pytest.raises(ValueError, match="load:viscous,viscous"):
+        parse_friction("load:viscous,viscous")
 
 
 def test_candidate_models(rs010n):
@@ -585,15 +592,19 @@ def test_candidate_models(rs010n):
 
     robot, base = rs010n
     plain = candidate_models(robot, base=base)
-    assert [m.friction for m in plain] == ["viscous-coulomb", "viscous-coulomb+offset",
-                                           "viscous-coulomb+offset+armature",
-                                           "viscous-coulomb+offset+quadratic+smooth"]
-    assert all(m.base is base for m in plain) and len(FRICTION_CANDIDATES) == 4
+    assert [m.friction for m in plain] == [
+        "viscous-coulomb+smooth", "viscous-coulomb+offset+smooth",
+        "viscous-coulomb+offset+smooth+armature", "viscous-coulomb+offset+quadratic+smooth",
+        "viscous-coulomb+offset+smooth+load", "viscous-coulomb+offset+smooth+armature+load"]
+    assert all(m.base is base for m in plain) and len(FRICTION_CANDIDATES) == 6
     coupled = sj.Transmission.from_gear_ratios([1.0, 1.0, 1.0], coupling={(3, 2): 1.0})
     per = candidate_models(robot, transmission=coupled, recordings=3)
-    assert [m.friction for m in per] == ["viscous-coulomb+offset+coupling",
-                                         "viscous-coulomb+offset+armature+coupling",
-                                         "viscous-coulomb+offset+quadratic+smooth+coupling"]
+    assert [m.friction for m in per] == [
+        "viscous-coulomb+offset+smooth+coupling",
+        "viscous-coulomb+offset+smooth+armature+coupling",
+        "viscous-coulomb+offset+quadratic+smooth+coupling",
+        "viscous-coulomb+offset+smooth+coupling+load",
+        "viscous-coulomb+offset+smooth+armature+coupling+load"]
     assert {m.recordings for m in per} == {3} and len({id(m.base) for m in per}) == 1
     assert [m.friction for m in candidate_models(robot, [(Quadratic(),)], base=base)] == [
         "viscous-coulomb+quadratic"]

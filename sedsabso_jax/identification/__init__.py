@@ -51,10 +51,12 @@ from ._validation import ESTIMATOR_CANDIDATES as ESTIMATOR_CANDIDATES
 from ._validation import PRIOR_STRENGTHS as PRIOR_STRENGTHS
 from ._validation import PriorSelection as PriorSelection
 from ._validation import Selection as Selection
+from ._validation import simplest_not_worse as simplest_not_worse
 
 __all__ = [
     "FitProblem", "EstimatorFit", "weigh", "AbstractLeastSquares", "FACE_TOLERANCE",
     "CrossValidation", "phase_folds", "repeat_period", "DEFAULT_FOLDS", "Selection",
+    "simplest_not_worse",
     "PriorSelection", "FRICTION_CANDIDATES", "ESTIMATOR_CANDIDATES", "PRIOR_STRENGTHS",
     "estimator_candidates", "candidate_models", "Choice", "Names", "DefaultValidation",
     "nrms_over_limits", "FRICTION_TERMS", "AbstractTerm", "Signals", "Shapes", "Fitted",

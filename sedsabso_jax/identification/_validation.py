@@ -41,7 +41,7 @@ Each takes the data as a :class:`~sedsabso_jax.Measurements`, several of them, o
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from typing import cast
 
 import numpy as np
@@ -203,6 +203,17 @@ class Selection:
                 "candidates": [{"settings": s, **cv.as_dict()} for s, cv in self.candidates]}
 
 
+def simplest_not_worse(scores: Sequence[CrossValidation], physical: Sequence[bool]) -> int:
+    """The index of the candidate the one-standard-error rule picks among ``scores``
+    (each candidate's validation, ``physical`` whether its fit is physically
+    consistent): the simplest, fewest parameters, then physically consistent, then the
+    earlier, of those not worse than the lowest-scoring one (:func:`~._folds.not_worse`)."""
+    best = min(scores, key=lambda cv: cv.score)
+    order = sorted(range(len(scores)), key=lambda i: (scores[i].n_parameters,
+                                                      not physical[i], i))
+    return next(i for i in order if not_worse(scores[i], best))
+
+
 def select_model(robot: Robot, data: Data, *,
                  models: TorqueModel | Iterable[TorqueModel] | None = None,
                  estimators: Estimator | Iterable[Estimator] | None = None,
@@ -241,11 +252,9 @@ def select_model(robot: Robot, data: Data, *,
                                 f"{model.friction}")
             tried.append((settings, prepared.validate(estimator, rows, on_fit)))
             options.append((estimator, model))
-    best_settings, best = min(tried, key=lambda c: c[1].score)
-    # simplest: fewest parameters, then physically consistent, then the earlier estimator
-    order = sorted(range(len(tried)), key=lambda i: (tried[i][1].n_parameters,
-                                                     not options[i][0].physical, i))
-    chosen = next(tried[i][0] for i in order if not_worse(tried[i][1], best))
+    best_settings = min(tried, key=lambda c: c[1].score)[0]
+    chosen = tried[simplest_not_worse([cv for _, cv in tried],
+                                      [e.physical for e, _ in options])][0]
     return Selection(candidates=tuple(tried), chosen=chosen, best=best_settings,
                      options=tuple(options))
 
