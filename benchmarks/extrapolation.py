@@ -159,7 +159,8 @@ def estimators() -> tuple[sj.Estimator, ...]:
                  for e in (base, sj.PhysicallyConsistent(base)))
 
 
-def study(plants: int, loto: bool = False, only: list[int] | None = None) -> dict:
+def study(plants: int, loto: bool = False, only: list[int] | None = None,
+          with_far: bool = False) -> dict:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the KUKA URDF's duplicate <origin>
         robot = sj.robots.kuka_lwr4()
@@ -191,7 +192,8 @@ def study(plants: int, loto: bool = False, only: list[int] | None = None) -> dic
             warnings.simplefilter("ignore")
             # the default's validation, whose parts are the phase folds and speed splits
             one = sj.select_model(robot, data, validation=DEFAULT, models=union, **common)
-            far = sj.select_model(robot, data, validation=FAR, models=models, **common)
+            far = sj.select_model(robot, data, validation=FAR, models=models,
+                                  **common) if with_far else None
             pooled = sj.select_model(robot, [data] + [new[(f"{s:g}x", t)] for t, s in zip(
                 others, SPEEDS)], validation=sj.Pooled(
                 (sj.RecordingFolds(), sj.PhaseFolds(), sj.SpeedSplits())),
@@ -200,7 +202,8 @@ def study(plants: int, loto: bool = False, only: list[int] | None = None) -> dic
         physical = [e.physical for e, _ in one.options]
         in_default = [m.friction in defaults for _, m in one.options]
         picks = {"default": choice(cvs, physical, in_default),
-                 "far": next(i for i, (s, _) in enumerate(far.candidates) if s is far.chosen),
+                 "far": -1 if far is None else next(
+                     i for i, (s, _) in enumerate(far.candidates) if s is far.chosen),
                  "previous": choice(cvs, physical, [
                      m.friction in {x.friction for x in previous_models}
                      for _, m in one.options])}
@@ -216,7 +219,7 @@ def study(plants: int, loto: bool = False, only: list[int] | None = None) -> dic
                    "speed": cv.part_scores["speed splits"],
                    **{f"new_{k}": v for k, v in measured.items()},
                    **{f"{c}_chosen": i == picks[c] for c in CHOICES}}
-            if in_default[i]:  # the default's candidates come first, in far's order
+            if in_default[i] and far is not None:  # the default's come first, as in far's
                 row["far"] = far.candidates[i][1].score
             if pooled is not None and in_default[i]:
                 four_cv = pooled.candidates[i][1]
@@ -266,7 +269,9 @@ def summarise(rows: list[dict]) -> dict:
         out[f"rho_{score}"] = entry
     previous = next(r for r in rows if r["previous_chosen"])
     for c in CHOICES:
-        pick = next(r for r in rows if r[f"{c}_chosen"])
+        pick = next((r for r in rows if r[f"{c}_chosen"]), None)
+        if pick is None:  # far's choice without --far
+            continue
         score = pick["far" if c == "far" else "pooled"]
         out[c] = {k: {"predicted_over_measured": score / pick[f"new_{k}"],
                       "chosen_over_best": pick[f"new_{k}"] / m.min(),
@@ -280,7 +285,8 @@ def format_summary(summary: dict) -> str:
     return "; ".join(
         f"{c} {summary[c]['friction'][16:]}: " + ", ".join(
             f"{k} {v['chosen_over_best']:.2f}/{v['predicted_over_measured']:.2f}"
-            for k, v in summary[c].items() if k != "friction") for c in CHOICES)
+            for k, v in summary[c].items() if k != "friction")
+        for c in CHOICES if c in summary)
 
 
 def table(results: list[dict]) -> list[dict]:
@@ -293,7 +299,7 @@ def table(results: list[dict]) -> list[dict]:
         if not group:
             continue
         label = "held out" if held_out else "tuned on"
-        for c in CHOICES:
+        for c in (c for c in CHOICES if c in group[0]):
             values = {f"{k} {key}": [g[c][k][key] for g in group] for k in MOTIONS
                       for key in ("chosen_over_best", "predicted_over_measured",
                                   "over_previous")}
@@ -316,14 +322,16 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--json", default=None)
     parser.add_argument("--loto", action="store_true",
                         help="also leave one trajectory out over four recordings (slow)")
+    parser.add_argument("--far", action="store_true",
+                        help="also choose by speed splits that extrapolate to 2x (FAR)")
     parser.add_argument("--only", type=int, nargs="+", default=None,
                         help="run these plants only (the designs stay those of --plants)")
     args = parser.parse_args(argv)
     jax.config.update("jax_enable_x64", True)
-    found = study(args.plants, args.loto, args.only)
+    found = study(args.plants, args.loto, args.only, args.far)
     found["device"] = device_info()
     found["command"] = ("python -m benchmarks.extrapolation --plants "
-                        f"{args.plants}" + " --loto" * args.loto
+                        f"{args.plants}" + " --loto" * args.loto + " --far" * args.far
                         + (" --only " + " ".join(map(str, args.only)) if args.only else "")
                         + (f" --json {args.json}" if args.json else ""))
     for row in found["table"]:

@@ -3,8 +3,9 @@
 growing with the transmitted torque, each fitted on run 1 by OLS and by the physically
 consistent OLS fit, judged on run 2 (NRMS over the torque limits, %). Run 2 repeats run
 1's trajectory: the figures measure repeatability, not how the terms extrapolate to new
-motions (what the default's choice must weigh, a later release's work), and none of
-these terms is among the default's candidates.
+motions (what the simulation study, ``benchmarks.extrapolation``, weighs). Of these terms
+smooth Coulomb friction and load-dependent friction (two stages) are among the
+default's candidates.
 
     python -m benchmarks.friction_terms [--json benchmarks/results/friction_terms.json]
 
@@ -30,7 +31,8 @@ from sedsabso_jax.dynamics import joint_limits
 from sedsabso_jax.identification import parse_friction
 
 FRICTIONS = ("offset", "offset+smooth", "offset+smooth:fit", "offset+stribeck:fit",
-             "offset+smooth:fit+stribeck:fit", "offset+load", "offset+smooth+load")
+             "offset+smooth:fit+stribeck:fit", "offset+load", "offset+smooth+load",
+             "offset+smooth+load:fixed-point")
 
 
 def nrms(pred: np.ndarray, tau: np.ndarray, limits: np.ndarray) -> float:
@@ -60,7 +62,10 @@ def main(argv=None) -> None:
                 ident = sj.identify(robot, fit_data, estimator, model, limits=limits)
             seconds = time.perf_counter() - t0
             load = ident.settings.get("load")
-            note = "" if not load else f"load {'settled' if load['settled'] else 'NOT settled'}"
+            note = "" if not load else (
+                f"load after {load['iterations']} fits" + (
+                    "" if "settled" not in load else
+                    f", {'settled' if load['settled'] else 'NOT settled'}"))
             shapes = ident.settings.get("shapes", {})
             on_bound = [k for k, s in shapes.items() if s["at_bound"]]
             if on_bound:

@@ -151,9 +151,9 @@ def test_phase_folds_follow_the_repeat_period():
 
 def test_selection_finds_the_torque_offset_and_rejects_extra_terms(rng):
     """Simulated RS010N torques with a constant offset per joint and noise: the offset is
-    chosen (cross-validated error far below without it) and the quadratic, armature and
-    load terms, which the data do not contain, are not (one-standard-error rule; every
-    default candidate's Coulomb friction is smooth)."""
+    chosen (cross-validated error far below without it) and the armature and load terms,
+    which the data do not contain, are not (one-standard-error rule; every default
+    candidate's Coulomb friction is smooth)."""
     robot = sj.robots.rs010n()
     traj = sj.FourierTrajectory(rng.uniform(-0.3, 0.3, (3, 4)), rng.uniform(-0.3, 0.3, (3, 4)),
                                 np.zeros(3), wf=2 * np.pi / 10)

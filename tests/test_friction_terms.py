@@ -72,9 +72,9 @@ def test_stribeck_and_load_columns_are_their_closed_forms(rs010n):
     assert model.nonnegative[-9:].all() and model.needs_load and not model.shapes()
 
 
-def test_prediction_reads_the_load_of_its_own_values(rs010n):
-    """``predict(values)`` is the model linearised at ``values`` times ``values``,
-    whatever the model's load point."""
+def test_prediction_reads_the_load_of_its_load_point(rs010n):
+    """``predict(values)`` of a model without a load point is the model linearised at
+    ``values`` times ``values``; with one (a fitted model), the load there."""
     robot, base = rs010n
     q, qd, qdd, _ = motion(3, T=30, seed=1)
     model = sj.TorqueModel.of(robot, (sj.LoadFriction(),), base=base)
@@ -83,6 +83,10 @@ def test_prediction_reads_the_load_of_its_own_values(rs010n):
     np.testing.assert_allclose(model.predict(values, q, qd, qdd), expected, rtol=1e-12)
     assert not np.allclose(model.regressor(q, qd, qdd) @ values, expected)  # prior's load
     assert model.linearized_at(values).load_point == tuple(values[:base.rank])
+    fitted = model.linearized_at(np.asarray(base.values) * 0.7)
+    np.testing.assert_allclose(fitted.predict(values, q, qd, qdd),
+                               fitted.regressor(q, qd, qdd) @ values, rtol=1e-12)
+    assert not np.allclose(fitted.predict(values, q, qd, qdd), expected)
 
 
 def simulated(robot, friction, seed=0, noise=0.01):
@@ -99,7 +103,8 @@ def simulated(robot, friction, seed=0, noise=0.01):
 def test_load_coefficients_are_recovered(rs010n):
     """A plant whose Coulomb friction grows by k |tau_rigid| (k = 0.04, 0.08, 0.06), 1 %
     noise: the two stages (the load of a fit without the term, then the fit with it) and
-    the fixed point each find every k within 10 %; the fixed point settles."""
+    the fixed point each find every k within 10 %, and the fitted model keeps the load
+    its fit used (predictions read it): the first stage's, or the fixed point's."""
     robot, base = rs010n
     k = np.array([0.04, 0.08, 0.06])
     data = simulated(robot, lambda load, qd: k * np.abs(load) * np.sign(qd))
@@ -110,11 +115,14 @@ def test_load_coefficients_are_recovered(rs010n):
             found = fit.values[[fit.names.index(f"FL{j + 1}") for j in range(3)]]
             np.testing.assert_allclose(found, k, rtol=0.1, err_msg=estimator.name)
             load = fit.settings["load"]
-            assert load == {"iterations": 1} if not term.fixed_point else (
-                load["settled"] and load["iterations"] < 15)
-            # predictions read the torque of the values themselves
-            assert fit.model.load_point == pytest.approx(tuple(fit.values[:base.rank]),
-                                                         rel=1e-4, abs=1e-6)
+            if term.fixed_point:  # the fit's load: the torque of its own values
+                assert load["settled"] and load["iterations"] < 15
+                assert fit.model.load_point == pytest.approx(
+                    tuple(fit.values[:base.rank]), rel=1e-4, abs=1e-6)
+            else:  # the fit's load: that of a least-squares fit without the term
+                assert load == {"iterations": 1}
+                plain = sj.identify(robot, data, sj.OLS(), sj.TorqueModel.of(robot, base=base))
+                assert fit.model.load_point == pytest.approx(tuple(plain.values[:base.rank]))
 
 
 def test_stribeck_velocities_are_searched_and_recovered(rs010n):
@@ -214,3 +222,15 @@ def test_another_plant_through_tree_at(rs010n):
     other = eqx.tree_at(lambda r: r.params, robot, robot.params * 2.0)
     np.testing.assert_allclose(rigid_torque(other, q, qd, qdd),
                                2.0 * rigid_torque(robot, q, qd, qdd), rtol=1e-12, atol=1e-9)
+
+
+def test_load_columns_do_not_depend_on_the_load_point(rs010n):
+    """Which load-friction columns the base regressor spans is decided once, not at the
+    load point: a model linearised where a joint carries no load (its column all zero
+    there) keeps the columns the validation fitted, so a fit's values always match the
+    model's columns."""
+    robot, base = rs010n
+    model = sj.TorqueModel.of(robot, (sj.Offset(), sj.LoadFriction()), base=base)
+    unloaded = model.linearized_at(np.zeros(model.dim))
+    assert unloaded.names == model.names and not model.regrouped
+    assert unloaded.regressor(*motion(robot.n_joints)[:3]).shape[-1] == model.dim

@@ -594,15 +594,14 @@ def test_candidate_models(rs010n):
     plain = candidate_models(robot, base=base)
     assert [m.friction for m in plain] == [
         "viscous-coulomb+smooth", "viscous-coulomb+offset+smooth",
-        "viscous-coulomb+offset+smooth+armature", "viscous-coulomb+offset+quadratic+smooth",
+        "viscous-coulomb+offset+smooth+armature",
         "viscous-coulomb+offset+smooth+load", "viscous-coulomb+offset+smooth+armature+load"]
-    assert all(m.base is base for m in plain) and len(FRICTION_CANDIDATES) == 6
+    assert all(m.base is base for m in plain) and len(FRICTION_CANDIDATES) == 5
     coupled = sj.Transmission.from_gear_ratios([1.0, 1.0, 1.0], coupling={(3, 2): 1.0})
     per = candidate_models(robot, transmission=coupled, recordings=3)
     assert [m.friction for m in per] == [
         "viscous-coulomb+offset+smooth+coupling",
         "viscous-coulomb+offset+smooth+armature+coupling",
-        "viscous-coulomb+offset+quadratic+smooth+coupling",
         "viscous-coulomb+offset+smooth+coupling+load",
         "viscous-coulomb+offset+smooth+armature+coupling+load"]
     assert {m.recordings for m in per} == {3} and len({id(m.base) for m in per}) == 1

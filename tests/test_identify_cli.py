@@ -57,7 +57,7 @@ def test_rs010n_noise_free_recovers_the_true_parameters(rs010n_files, tmp_path, 
 def test_kuka_real_data_end_to_end(tmp_path, capsys):
     """A slice of the real KUKA LWR4+ runs: the default method identifies on run 1 and
     validates on run 2; the JSON has the documented keys, the model chosen by the pooled
-    phase folds and speed splits on run 1's slice (36 candidates: 18 unconstrained, 18
+    phase folds and speed splits on run 1's slice (30 candidates: 15 unconstrained, 15
     physically consistent)
     is the physically consistent OLS fit with offset and smooth Coulomb friction, and
     the held-out NRMS over the torque limits is pinned to +-5 % (measured 0.15069 % on
@@ -82,7 +82,7 @@ def test_kuka_real_data_end_to_end(tmp_path, capsys):
     cv = doc["cross_validation"]
     assert cv["validation"]["kind"] == "pooled" and len(cv["fold_scores"]) == 5 + 7
     assert set(cv["part_scores"]) == {"phase folds", "speed splits"}
-    assert len(cv["selection"]["candidates"]) == 36 and 0.15 < cv["score"] < 0.3
+    assert len(cv["selection"]["candidates"]) == 30 and 0.15 < cv["score"] < 0.3
 
 
 def _write_bad(tmp_path, case: str, good: str) -> str:
@@ -273,8 +273,8 @@ def test_the_command_is_one_library_call(flags, call, rs010n_files, tmp_path, ca
     cli_settings = {k: doc["settings"][k] for k in ("robot", "data", "validate",
                                                      "torque_limits", "loading", "motor_side")}
     assert _without_times(doc) == _without_times(report.document(cli_settings))
-    # default: OLS and Gautier's WLS (no limits known), 6 torque models, both kinds
-    assert len(report.selection.candidates) == (1 if call else 24)
+    # default: OLS and Gautier's WLS (no limits known), 5 torque models, both kinds
+    assert len(report.selection.candidates) == (1 if call else 20)
 
 
 def test_select_and_identify_checks_its_arguments(rs010n_files):

@@ -16,11 +16,14 @@
   works for every estimator (least squares, physically consistent, L1, a box search),
   where a joint solve of the bilinear problem would need each one's nonlinear form.
   ``LoadFriction(fixed_point=True)`` goes on to a fixed point: fit with the load of the
-  last fit's parameters until the load changes by less than :data:`LOAD_RTOL`. Measured
-  on the KUKA LWR4+ and the Staubli TX40 (the default's validation, OLS and its
-  physically consistent fit): the fixed point took 6-30 fits (unconstrained on the KUKA
-  it did not settle in 30) and validated no better than the two stages (KUKA, physical:
-  0.231 % against 0.217 %; TX40 2.058 % against 2.060 %).
+  last fit's parameters until the load changes by less than :data:`LOAD_RTOL`. The
+  fitted model keeps the load its fit used (its load point), and predicts with it.
+  Measured on the KUKA LWR4+ and the Staubli TX40 (offset, smooth Coulomb and load
+  friction, + coupling on the TX40; the default's validation; OLS unconstrained and
+  physically consistent): the fixed point took 6-30 fits (unconstrained on the KUKA it
+  did not settle in 30), validated 0.389 % and 0.230 % on the KUKA against the two
+  stages' 0.320 % and 0.219 %, and on the TX40 within 0.2 % of them (1.865 % and
+  1.830 % against 1.867 % and 1.834 %), 1.2-3.6 times slower.
 
 :func:`fit` does both (the scales first, with the load at the model's load point) and
 returns the model as fitted (scales and load point set) with the linear fit.
@@ -105,7 +108,7 @@ class Samples:
         values = np.asarray(values, dtype=float)
         if values.shape != (model.dim,):
             raise ValueError(f"values must have shape ({model.dim},), got {values.shape}")
-        return self.rows(model.linearized_at(values)) @ values
+        return self.rows(model.at_load_of(values)) @ values
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -247,6 +250,8 @@ def _settle_load(estimator: Estimator, model: TorqueModel, samples: Samples,
     change = np.inf
     for iteration in range(1, (LOAD_ITERATIONS if settle else 1) + 1):
         out, Y = linear(estimator, model, samples, limits, warn and iteration == 1)
+        if not settle:  # two stages: the model keeps the load its fit used
+            return model, out, Y, {"iterations": 1}
         new = Y[..., rigid] @ out.x[rigid]
         if load is not None:
             change = float(np.max(np.abs(new - load)) / max(np.max(np.abs(new)), 1e-300))
@@ -254,8 +259,6 @@ def _settle_load(estimator: Estimator, model: TorqueModel, samples: Samples,
         if change < LOAD_RTOL:
             break
     report = {"iterations": iteration}
-    if not settle:
-        return model, out, Y, report
     settled = change < LOAD_RTOL
     if not settled and warn:
         warnings.warn(f"identify: the load-dependent friction's fixed point did not settle "
