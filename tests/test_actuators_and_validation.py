@@ -167,7 +167,8 @@ def test_selection_finds_the_torque_offset_and_rejects_extra_terms(rng):
     assert sel.cross_validation is dict(
         (s["friction"], cv) for s, cv in sel.candidates)["viscous-coulomb+offset+smooth"]
     scores = {s["friction"]: cv for s, cv in sel.candidates}
-    assert scores["viscous-coulomb+offset+smooth"].score < 0.5 * scores["viscous-coulomb+smooth"].score
+    offset, plain = scores["viscous-coulomb+offset+smooth"], scores["viscous-coulomb+smooth"]
+    assert offset.score < 0.5 * plain.score
     assert scores["viscous-coulomb+offset+smooth"].period_s == pytest.approx(10.0, abs=0.05)
     cv = cross_validate(robot, recording, sj.OLS(), sel.model, validation=sj.PhaseFolds(5))
     assert cv.score == pytest.approx(scores["viscous-coulomb+offset+smooth"].score)

@@ -267,7 +267,8 @@ BUGS = [
     ("identification/_friction_state.py", "        s = jnp.sign(d)\n",
      "        s = jnp.sign(d) * 0.9\n", "the presliding state saturates below 1", STATE, None),
     ("identification/_model.py",
-     "        load = np.random.default_rng(2).standard_normal(q.shape) if self.needs_load else None",
+     "        load = np.random.default_rng(2).standard_normal(q.shape) "
+     "if self.needs_load else None",
      "        load = None", "which load columns a model keeps depends on its load point",
      FRICTION, None),
 ]

@@ -10,7 +10,7 @@ import equinox as eqx
 import numpy as np
 
 from ._friction_state import presliding_state
-from ._scales import as_scale, check_scale, per_joint
+from ._scales import as_scale, check_scale, per_joint, searched
 from ._term_base import AbstractTerm, Shapes, Signals, TorqueModelView, diagonal
 
 #: Characteristic displacement (rad or m) of :class:`Presliding` unless told.
@@ -87,10 +87,7 @@ class Presliding(AbstractTerm):
     def shapes(self, model: TorqueModelView) -> Shapes | None:
         if not self.fitted:
             return None
-        n = model.robot.n_joints
-        lo, hi = self.bounds
-        return Shapes(tuple(f"q_c{j + 1}" for j in range(n)),
-                      np.clip(self.per_joint(n), lo, hi), np.full(n, lo), np.full(n, hi))
+        return searched("q_c", self.per_joint(model.robot.n_joints), self.bounds)
 
     def with_shapes(self, values: np.ndarray) -> AbstractTerm:
         return dataclasses.replace(self, displacement=tuple(float(v) for v in values))

@@ -83,10 +83,7 @@ class AbstractVelocityScale(AbstractTerm):
     def shapes(self, model: TorqueModelView) -> Shapes | None:
         if not self.fitted:
             return None
-        n = model.robot.n_joints
-        lo, hi = self.bounds
-        return Shapes(tuple(f"{self.symbol}{j + 1}" for j in range(n)),
-                      np.clip(self.per_joint(n), lo, hi), np.full(n, lo), np.full(n, hi))
+        return searched(self.symbol, self.per_joint(model.robot.n_joints), self.bounds)
 
     def with_shapes(self, values: np.ndarray) -> AbstractTerm:
         return dataclasses.replace(self, velocity=tuple(float(v) for v in values))
@@ -97,3 +94,11 @@ class AbstractVelocityScale(AbstractTerm):
         if self.fitted:
             out[f"{self.name}_fitted"] = True
         return out
+
+
+def searched(symbol: str, values: np.ndarray, bounds: tuple[float, float]) -> Shapes:
+    """The :class:`Shapes` of one scale per joint, ``{symbol}{joint}``, searched from
+    ``values`` (clipped to ``bounds``) within ``bounds``."""
+    n, (lo, hi) = len(values), bounds
+    return Shapes(tuple(f"{symbol}{j + 1}" for j in range(n)), np.clip(values, lo, hi),
+                  np.full(n, lo), np.full(n, hi))
