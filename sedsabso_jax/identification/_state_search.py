@@ -72,7 +72,9 @@ class PreslidingProblem(eqx.Module):
         w = np.ones(n) if weights is None else np.asarray(weights, dtype=float)
         if w.shape != (n,) or not np.all(np.isfinite(w) & (w > 0)):
             raise ValueError(f"weights must be {n} finite numbers > 0, got {weights!r}")
-        index = np.arange(data.n_samples)[slice(None) if keep is None else keep]
+        index = np.arange(data.n_samples)
+        if keep is not None:
+            index = index[np.asarray(keep)]
         samples = Samples(data.q, data.qd, data.qdd, data.tau).subset(index)
         A = np.asarray(samples.rows(rest)) * w[:, None]
         scale = np.linalg.norm(A.reshape(-1, A.shape[-1]), axis=0)
