@@ -25,8 +25,9 @@
   stages' 0.320 % and 0.219 %, and on the TX40 within 0.2 % of them (1.865 % and
   1.830 % against 1.867 % and 1.834 %), 1.2-3.6 times slower.
 
-:func:`fit` does both (the scales first, with the load at the model's load point) and
-returns the model as fitted (scales and load point set) with the linear fit.
+:func:`fit` does both (the load's first stage, then the scales' search with that load,
+then the estimator's fit) and returns the model as fitted (scales and load point set)
+with the linear fit.
 """
 
 from __future__ import annotations
