@@ -1,7 +1,7 @@
-"""Terms with a scale a fit may search (:mod:`._shapes`): a velocity scale
-(:class:`AbstractVelocityScale`, of :class:`~._terms.SmoothCoulomb` and
-:class:`~._terms.Stribeck`), and the converter and check of a scale given as one number
-or one per joint (also :class:`~._terms.Presliding`'s displacement)."""
+"""Terms with a scale a fit may search (:mod:`._shapes`): :class:`AbstractScale`, of a
+velocity (:class:`AbstractVelocityScale`: :class:`~._terms.SmoothCoulomb`,
+:class:`~._terms.Stribeck`) or a displacement (:class:`~._presliding.Presliding`), and
+the converter and check of a scale given as one number or one per joint."""
 
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 import dataclasses
@@ -37,48 +37,58 @@ def per_joint(name: str, value: float | tuple[float, ...], n: int) -> np.ndarray
     return np.broadcast_to(v, (n,))
 
 
-class AbstractVelocityScale(AbstractTerm):
-    """A term with a velocity scale (rad/s or m/s): fixed (one for every joint, or one
-    per joint), or with ``fitted=True`` one per joint searched by the fit from the value
-    given (:mod:`._shapes`) within :attr:`bounds`."""
+class AbstractScale(AbstractTerm):
+    """A term with a scale per joint (a velocity, a displacement): fixed (one for every
+    joint, or one per joint), or with ``fitted=True`` one per joint searched by the fit
+    from the value given (:mod:`._shapes`) within :attr:`bounds`. A final class names its
+    scale's field (``scale_name``), its unit for messages (``scale_unit``), its default
+    (``default_scale``) and the scales' names in reports (``{symbol}{joint}``)."""
 
-    velocity: eqx.AbstractVar[float | tuple[float, ...]]
     fitted: eqx.AbstractVar[bool]
-    #: The scales' search box (rad/s or m/s).
-    bounds: ClassVar[tuple[float, float]] = (1e-4, 1.0)
-    #: The scales' names in reports: ``{symbol}{joint}``.
+    bounds: eqx.AbstractClassVar[tuple[float, float]]
+    scale_name: eqx.AbstractClassVar[str]
+    scale_unit: eqx.AbstractClassVar[str]
+    default_scale: eqx.AbstractClassVar[float]
     symbol: eqx.AbstractClassVar[str]
-    default_velocity: eqx.AbstractClassVar[float]
+
+    @property
+    def scale(self) -> float | tuple[float, ...]:
+        """The scale as given: one number, or one per joint."""
+        return getattr(self, self.scale_name)
 
     def __check_init__(self):
-        check_scale(f"{type(self).__name__}'s velocity", self.velocity)
+        check_scale(f"{type(self).__name__}'s {self.scale_name}", self.scale)
+        if not isinstance(self.fitted, bool):
+            raise ValueError(f"{type(self).__name__}'s fitted must be True or False, got "
+                             f"{self.fitted!r}")
 
     def per_joint(self, n: int) -> np.ndarray:
-        """The velocity scale of each of ``n`` joints."""
-        return per_joint(f"{self.name}'s velocity", self.velocity, n)
+        """The scale of each of ``n`` joints."""
+        return per_joint(f"{self.name}'s {self.scale_name}", self.scale, n)
 
     @property
     def text(self) -> str:
+        v = self.scale
         if self.fitted:
             return f"{self.name}:fit"
-        if self.velocity != self.default_velocity:
-            return f"{self.name}:{self.velocity:g}" if isinstance(self.velocity, float) \
-                else f"{self.name}:" + ",".join(f"{v:g}" for v in self.velocity)
+        if v != self.default_scale:
+            return f"{self.name}:" + (f"{v:g}" if isinstance(v, float)
+                                      else ",".join(f"{x:g}" for x in v))
         return self.name
 
     @classmethod
     def parse(cls, option: str | None) -> AbstractTerm:
-        if option is None:
-            return cls()  # type: ignore[call-arg]
-        if option == "fit":
-            return cls(fitted=True)  # type: ignore[call-arg]
+        if option is None or option == "fit":
+            return cls(fitted=option == "fit")  # type: ignore[call-arg]
         try:
             values = [float(v) for v in option.split(",")]
         except ValueError:
             raise ValueError(f"friction term {cls.name!r}: expected {cls.name}:fit or "
-                             f"{cls.name}:VELOCITY (rad/s, one or one per joint, "
-                             f"comma-separated), got {cls.name}:{option}") from None
-        return cls(velocity=values[0] if len(values) == 1 else tuple(values))  # type: ignore[call-arg]
+                             f"{cls.name}:{cls.scale_name.upper()} ({cls.scale_unit}, one "
+                             f"or one per joint, comma-separated), got "
+                             f"{cls.name}:{option}") from None
+        return cls(**{cls.scale_name: values[0] if len(values) == 1  # type: ignore[arg-type]
+                      else tuple(values)})
 
     def shapes(self, model: TorqueModelView) -> Shapes | None:
         if not self.fitted:
@@ -86,14 +96,26 @@ class AbstractVelocityScale(AbstractTerm):
         return searched(self.symbol, self.per_joint(model.robot.n_joints), self.bounds)
 
     def with_shapes(self, values: np.ndarray) -> AbstractTerm:
-        return dataclasses.replace(self, velocity=tuple(float(v) for v in values))
+        scale = {self.scale_name: tuple(float(v) for v in values)}
+        return dataclasses.replace(self, **scale)  # type: ignore[arg-type]
 
     def settings(self) -> dict:
-        v = self.velocity
-        out: dict = {f"{self.name}_velocity": list(v) if isinstance(v, tuple) else v}
+        v = self.scale
+        out: dict = {f"{self.name}_{self.scale_name}": list(v) if isinstance(v, tuple) else v}
         if self.fitted:
             out[f"{self.name}_fitted"] = True
         return out
+
+
+class AbstractVelocityScale(AbstractScale):
+    """A term with a velocity scale (rad/s or m/s): :class:`AbstractScale` of the field
+    ``velocity``."""
+
+    velocity: eqx.AbstractVar[float | tuple[float, ...]]
+    #: The scales' search box (rad/s or m/s).
+    bounds: ClassVar[tuple[float, float]] = (1e-4, 1.0)
+    scale_name: ClassVar[str] = "velocity"
+    scale_unit: ClassVar[str] = "rad/s"
 
 
 def searched(symbol: str, values: np.ndarray, bounds: tuple[float, float]) -> Shapes:

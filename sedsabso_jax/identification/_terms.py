@@ -134,7 +134,7 @@ class SmoothCoulomb(AbstractVelocityScale):
     name: ClassVar[str] = "smooth"
     nonnegative: ClassVar[bool] = False
     symbol: ClassVar[str] = "v_smooth"
-    default_velocity: ClassVar[float] = SMOOTH_VELOCITY
+    default_scale: ClassVar[float] = SMOOTH_VELOCITY
 
     def names(self, model: TorqueModelView) -> tuple[str, ...]:
         if None in model.base.joint_columns("FC"):
@@ -200,7 +200,7 @@ class Stribeck(AbstractVelocityScale):
     name: ClassVar[str] = "stribeck"
     nonnegative: ClassVar[bool] = True
     symbol: ClassVar[str] = "v_stribeck"
-    default_velocity: ClassVar[float] = STRIBECK_VELOCITY
+    default_scale: ClassVar[float] = STRIBECK_VELOCITY
 
     def names(self, model: TorqueModelView) -> tuple[str, ...]:
         n = model.robot.n_joints
