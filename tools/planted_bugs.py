@@ -187,8 +187,8 @@ BUGS = [
     ("identification/_physical.py", "        constraints.append(extras[list(nonneg)] >= 0)",
      "        pass", "quadratic friction may turn negative in a physical fit", VALIDATIONS,
      None),
-    ("identification/_validation.py", "not options[i][0].physical, i))",
-     "options[i][0].physical, i))", "the rule prefers the unconstrained fit at equal "
+    ("identification/_validation.py", "not physical[i], i))",
+     "physical[i], i))", "the rule prefers the unconstrained fit at equal "
      "parameters", VALIDATIONS, None),
     ("identification/_auto.py", "    return Pooled((interpolation, SpeedSplits()))",
      "    return SpeedSplits()", "the default chooses by the speed splits alone",
