@@ -1,5 +1,5 @@
 """``sedsabso-jax identify``: the flags become a robot, data and estimator objects, then
-one library call (:func:`~sedsabso_jax.identification._auto.select_and_identify`) whose
+one library call (:func:`~sedsabso_jax.select_and_identify`) whose
 report is printed and written."""
 
 from __future__ import annotations
@@ -48,8 +48,8 @@ def _prior_strength(text: str):
 def _choice(args: argparse.Namespace, physical: bool | None, candidates: int) -> Any:
     """The library's :class:`~sedsabso_jax.identification.Choice` of the flags (its rules
     checked, named by the flags), before any data are loaded."""
-    from ..identification._auto import Choice, DefaultValidation, Names
-    from ..identification._splits import PhaseFolds, RecordingFolds, SpeedSplits
+    from ..identification._default._choice import Choice, DefaultValidation, Names
+    from ..identification._validation._splits import PhaseFolds, RecordingFolds, SpeedSplits
 
     names = Names(physical="--physical", prior_strength="--prior-strength",
                   prior_cv="--prior-strength cv", no_validation="--folds 0",
@@ -72,10 +72,11 @@ def run(args: argparse.Namespace) -> None:
     """The subcommand: check the flags, load, build the objects, one call, print, write."""
     from ..dynamics import _robots as robots
     from ..dynamics._limits import joint_limits
-    from ..identification._auto import estimator_candidates, select_and_identify
-    from ..identification._identify import recordings_of
-    from ..identification._model import FRICTION_CANDIDATES, candidate_models
-    from ..identification._terms import parse_friction
+    from ..identification._default._choice import estimator_candidates
+    from ..identification._default._select_and_identify import select_and_identify
+    from ..identification._recordings import recordings_of
+    from ..identification._model._candidates import FRICTION_CANDIDATES, candidate_models
+    from ..identification._model._order import parse_friction
 
     check_writable(args.out, args.json, args.urdf_out)
     if args.urdf_out is not None and args.physical is False:
@@ -128,10 +129,10 @@ def run(args: argparse.Namespace) -> None:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The ``identify`` subcommand's flags, in groups."""
-    from ..identification._fitting import Estimator
-    from ..identification._model import FRICTION_CANDIDATES
-    from ..identification._terms import FRICTION_TERMS, friction_text
-    from ..identification._validation import PRIOR_STRENGTHS
+    from ..identification._estimators._estimator import Estimator
+    from ..identification._model._candidates import FRICTION_CANDIDATES
+    from ..identification._model._order import FRICTION_TERMS, friction_text
+    from ..identification._validation._selection import PRIOR_STRENGTHS
 
     ip = subcommand(
         sub, "identify",

@@ -1,5 +1,5 @@
 """``sedsabso-jax identify-payload``: the flags become a robot, recordings and a torque
-model, then one library call (:func:`~sedsabso_jax.identification._payload.identify_payload`)
+model, then one library call (:func:`~sedsabso_jax.identify_payload`)
 whose payload is printed and written."""
 
 from __future__ import annotations
@@ -18,9 +18,10 @@ def run(args: argparse.Namespace) -> None:
     """The subcommand: check the flags, load, one call, print, write."""
     from .._output import write_json
     from ..dynamics import _robots as robots
-    from ..identification._model import TorqueModel
-    from ..identification._payload import identify_payload
-    from ..identification._terms import parse_friction
+    from ..identification._estimators._least_squares import OLS, WLS, PhysicallyConsistent
+    from ..identification._model._torque_model import TorqueModel
+    from ..identification._payload._identify_payload import identify_payload
+    from ..identification._model._order import parse_friction
 
     check_writable(None, args.json)
     terms = parse_friction(args.friction)
@@ -36,10 +37,12 @@ def run(args: argparse.Namespace) -> None:
     if unloaded:
         count = len(loaded) + len(unloaded) if args.offset_per_recording else 1
         model = TorqueModel.of(robot, terms, transmission=transmission, recordings=count)
+    estimator = WLS() if args.weights == "residual" else OLS()
+    if args.physical:
+        estimator = PhysicallyConsistent(estimator)
     with files.urdf_source(args.robot) as urdf:
         payload = identify_payload(robot, loaded, args.link, unloaded=unloaded or None,
-                                   model=model, sigma=args.weights, urdf=urdf,
-                                   physical=args.physical)
+                                   estimator=estimator, model=model, urdf=urdf)
     print(payload.text())
     if args.json is not None:
         settings = {"robot": args.robot, "link": args.link,
@@ -53,7 +56,7 @@ def run(args: argparse.Namespace) -> None:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The ``identify-payload`` subcommand's flags, in groups."""
-    from ..identification._terms import FRICTION_TERMS
+    from ..identification._model._order import FRICTION_TERMS
 
     pp = subcommand(
         sub, "identify-payload",
@@ -94,8 +97,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      help="row weights per joint: residual (Gautier's two-step, default) or "
                      "equal")
     est.add_argument("--physical", action=argparse.BooleanOptionalAction, default=True,
-                     help="a physically consistent payload (positive semidefinite "
-                     "pseudo-inertia; default); --no-physical: the unconstrained estimate")
+                     help="physically consistent parameters (positive semidefinite "
+                     "pseudo-inertia of the payload and, in a joint fit with --data, of "
+                     "every link; friction >= 0; default); --no-physical: unconstrained")
     out = pp.add_argument_group("outputs", "written atomically: a failed run leaves none")
     out.add_argument("--json", metavar="PATH", default=None,
                      help="write the payload as JSON (payload.mass [kg], payload.com [m], "

@@ -30,8 +30,8 @@ import numpy as np
 from jaxtyping import ArrayLike, Float
 
 from ..dynamics._robots import kuka_lwr4
-from ..identification._box_search import BoxSearch
-from ..identification._model import TorqueModel
+from ..identification._estimators._box_search import BoxSearch
+from ..identification._model._torque_model import TorqueModel
 from ..measurements._load import load_kuka_lwr4
 from ..optim._fitness import BlackBox, L1Residual
 from ..optim._linear import l1_solve_box

@@ -5,6 +5,7 @@ into the kept type and leaves anything else for the check, which names the optio
 from __future__ import annotations
 
 import numbers
+from typing import Any
 
 import numpy as np
 
@@ -46,3 +47,9 @@ def check_number(name: str, value: object, strict: bool = False) -> None:
     if not isinstance(value, float) or not (np.isfinite(value)
                                             and (value > 0 if strict else value >= 0)):
         raise ValueError(f"{name} must be a number {'>' if strict else '>='} 0, got {value!r}")
+
+
+def one_or_more(value: Any, kind: type) -> tuple[Any, ...]:
+    """``value`` as a tuple: one ``kind`` as a tuple of it, a sequence of them as a
+    tuple."""
+    return (value,) if isinstance(value, kind) else tuple(value)

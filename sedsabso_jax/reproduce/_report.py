@@ -15,7 +15,7 @@ from .. import _output, paper
 from .._output import PathLike, to_json, write_text
 from ..dynamics._base_parameters import base_parameters
 from ..dynamics._robot import Robot
-from ..identification._report import PARAMETER_UNITS
+from ..identification._default._report import PARAMETER_UNITS
 from ._experiment import Experiment
 
 if TYPE_CHECKING:

@@ -1,0 +1,159 @@
+"""What the default chooses among and by, and the rules between its options, stated
+once: the estimators (:func:`estimator_candidates`), the validation
+(:class:`DefaultValidation`) and :class:`Choice`, which the command line builds from its
+flags before it loads any data."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from typing import Any, ClassVar, cast
+
+import equinox as eqx
+
+from ...measurements._container import Measurements
+from .._estimators._estimator import Estimator, Sigma
+from .._estimators._least_squares import PhysicallyConsistent
+from .._options import as_float, as_int, check_count
+from .._validation._phase import DEFAULT_FOLDS
+from .._validation._selection import ESTIMATOR_CANDIDATES
+from .._validation._splits import PhaseFolds, Pooled, RecordingFolds, SpeedSplits, Validation
+
+
+#: The weightings a fixed estimator is tried with (None: equal), simplest first.
+SIGMA_CANDIDATES = (None, "residual", "limits")
+#: ``sigma`` of :func:`estimator_candidates` that leaves the weighting to validation.
+AUTO = "auto"
+
+
+def estimator_candidates(method: str | None = None, sigma: Sigma = AUTO, **options: Any
+                         ) -> tuple[Estimator, ...]:
+    """The estimators the default chooses among.
+
+    - ``method`` None: :data:`~._validation.ESTIMATOR_CANDIDATES` (OLS, Gautier's WLS,
+      WLS by the limits), or those of them with weighting ``sigma``;
+    - a registered name (``"L1"``, ``"SEDSABSO"``, ...) with ``sigma`` :data:`AUTO`: that
+      estimator with each weighting of :data:`SIGMA_CANDIDATES` (WLS without None, which
+      is its residual weighting), except a costly one (a box search: every run is
+      costly), which searches no weighting (equal weights);
+    - a name and a ``sigma``: that estimator alone.
+
+    ``sigma``: :data:`AUTO`, None or ``"equal"``, ``"residual"``, ``"limits"``;
+    ``options``: the named estimator's options (``runs``, ``iterations``, ``seed``, ...;
+    those it does not have are ignored)."""
+    if sigma != AUTO and sigma != "equal" and sigma not in SIGMA_CANDIDATES:
+        raise ValueError(f"sigma must be {AUTO!r}, 'equal' (None), 'residual' or 'limits', "
+                         f"got {sigma!r}")
+    if method is None:
+        wanted = None if sigma == "equal" else sigma
+        return tuple(e for e in ESTIMATOR_CANDIDATES if sigma == AUTO or e.sigma == wanted)
+    first = Estimator.named(method, **options)
+    if sigma == "equal":  # None where that is equal weights, else explicit
+        sigma = None if first.default_weighting == "equal" else "equal"
+    if sigma != AUTO:
+        return (Estimator.named(method, sigma=sigma, **options),)
+    if first.costly:
+        return (first,)
+    return tuple(Estimator.named(method, sigma=s, **options) for s in SIGMA_CANDIDATES
+                 if s is not None or first.default_weighting == "equal")
+
+
+class DefaultValidation(eqx.Module):
+    """What :func:`select_and_identify` chooses by unless told, made for the recordings
+    (:meth:`of`): ``Pooled((PhaseFolds(folds), SpeedSplits()))``, with
+    :class:`~._splits.RecordingFolds` (leave one recording out) instead of the phase folds
+    for several recordings."""
+
+    folds: int = eqx.field(default=DEFAULT_FOLDS, converter=as_int)
+    kind: ClassVar[str] = "default"
+    min_recordings: ClassVar[int] = 1
+
+    def __check_init__(self):
+        check_count("folds", self.folds, 2)
+
+    def of(self, recordings: Sequence[Measurements]) -> Validation:
+        """The validation of ``recordings``."""
+        interpolation: Validation = (RecordingFolds() if len(recordings) > 1
+                                     else PhaseFolds(self.folds))
+        return Pooled((interpolation, SpeedSplits()))
+
+
+@dataclasses.dataclass(frozen=True)
+class Names:
+    """How :class:`Choice`'s messages name the options: :func:`select_and_identify`'s
+    arguments unless told (the command line gives its flags)."""
+
+    physical: str = "physical=True"
+    prior_strength: str = "prior_strength"
+    prior_cv: str = "prior_strength='cv'"
+    no_validation: str = "validation=None"
+    one_candidate: str = "give one estimator and one torque model"
+    offset_per_recording: str = "one torque offset per recording"
+    validation: str = "validation"
+    several: str = "several recordings"
+
+
+class Choice(eqx.Module):
+    """How :func:`select_and_identify` chooses, with the rules between its options stated
+    once and checked when built (a one-line ValueError naming the options as ``names``
+    spells them): the command line builds one from its flags before it loads any data.
+
+    ``validation``: what chooses (a :class:`~._splits.Validation`, a
+    :class:`DefaultValidation`, or None: nothing is validated, one candidate is fitted);
+    ``physical``: only physically consistent fits (True), only unconstrained ones (False),
+    or both (None); ``prior_strength``: a number, or ``"cv"`` to choose it by validation;
+    ``candidates``: torque models x estimators given; ``recordings``: the recordings
+    fitted together; ``offset_per_recording``: whether a model has one offset each."""
+
+    validation: Validation | DefaultValidation | None = DefaultValidation()
+    physical: bool | None = None
+    prior_strength: float | str = eqx.field(default=0.0, converter=as_float)
+    candidates: int = 1
+    recordings: int = 1
+    offset_per_recording: bool = False
+    names: Names = Names()
+
+    def __check_init__(self):
+        n = self.names
+        if self.physical not in (None, True, False):
+            raise ValueError(f"physical must be None (both, chosen by validation), True or "
+                             f"False, got {self.physical!r}")
+        if self.prior_strength != "cv" and not (isinstance(self.prior_strength, float)
+                                                and self.prior_strength >= 0):
+            raise ValueError(f"{n.prior_strength} must be a number >= 0 or 'cv', got "
+                             f"{self.prior_strength!r}")
+        if self.prior_strength != 0.0 and self.physical is not True:
+            raise ValueError(f"{n.prior_strength} needs {n.physical}: the pull to the "
+                             f"a-priori parameters is part of the physically consistent fit")
+        if self.prior_strength == "cv" and self.validation is None:
+            raise ValueError(f"{n.prior_cv} chooses by validation, which {n.no_validation} "
+                             f"turns off: give a number")
+        if self.validation is None and self.candidates > 1:
+            raise ValueError(f"{n.no_validation} turns validation off, so nothing can be "
+                             f"chosen by it: {n.one_candidate}")
+        if self.offset_per_recording and self.recordings < 2:
+            raise ValueError(f"{n.offset_per_recording} needs {n.several}")
+        if self.validation is not None and self.recordings < self.validation.min_recordings:
+            raise ValueError(f"{n.validation} ({self.validation.kind}) needs {n.several}")
+
+    def validation_of(self, recordings: Sequence[Measurements]) -> Validation | None:
+        """The validation for ``recordings`` (None: none)."""
+        return None if self.validation is None else self.validation.of(recordings)
+
+    def estimators(self, estimators: tuple[Estimator, ...]) -> tuple[Estimator, ...]:
+        """The candidates to fit: each estimator as given (``physical`` False, or nothing
+        validated with ``physical`` None), physically consistent (True, fitted with a
+        number ``prior_strength``), or both (None: the physically consistent form of each
+        least-squares estimator after it)."""
+        if self.physical is False or (self.physical is None and self.validation is None):
+            return estimators
+        if self.physical:
+            physical = tuple(cast(PhysicallyConsistent, e.physically_consistent())
+                             for e in estimators)
+            if isinstance(self.prior_strength, str):  # "cv": chosen after the model
+                return physical
+            return tuple(dataclasses.replace(e, prior_strength=self.prior_strength)
+                         for e in physical)
+        # a least-squares fit (on normal equations) has a physically consistent form
+        return tuple(f for e in estimators for f in (
+            (e, e.physically_consistent()) if e.normal_equations and not e.physical else (e,)))

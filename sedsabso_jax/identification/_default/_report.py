@@ -1,0 +1,369 @@
+"""What ``sedsabso-jax identify`` reports: the identified parameters, fit and validation
+metrics as text, a JSON document, and measured-against-predicted torque plots."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+from jaxtyping import ArrayLike, Float
+
+from ..._output import (
+    PathLike,
+    columns_note,
+    jsonable,
+    markdown_table,
+    pyplot,
+    save_figure,
+    write_json,
+    write_text,
+)
+from ...measurements._container import Measurements
+from .._validation._extrapolation import Extrapolation, extrapolation
+from .._estimators._estimator import Limits
+from .._fit._identify import Identification
+from .._recordings import joined, stacked
+from .._metrics import Metrics, validation_metrics
+from .._fit._uncertainty import relative_std_percent
+from .._validation._selection import CrossValidation, PriorSelection, Selection
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+
+def figure_torques(times: Float[ArrayLike, " T"], tau_measured: Float[ArrayLike, "T n"],
+                   tau_predicted: Float[ArrayLike, "T n"], joint_names: Sequence[str],
+                   title: str) -> Figure:
+    """Measured against predicted torque per joint (one panel each), error in the legend."""
+    plt = pyplot()
+    tau_measured, tau_predicted = np.asarray(tau_measured), np.asarray(tau_predicted)
+    n = tau_measured.shape[1]
+    t = np.asarray(times) - float(np.asarray(times)[0])
+    fig, axes = plt.subplots(n, 1, figsize=(8, 1.6 * n + 0.8), sharex=True,
+                             constrained_layout=True, squeeze=False)
+    for j, ax in enumerate(axes[:, 0]):
+        rms = float(np.sqrt(np.mean((tau_predicted[:, j] - tau_measured[:, j]) ** 2)))
+        ax.plot(t, tau_measured[:, j], color="0.3", lw=1.2, label="measured")
+        ax.plot(t, tau_predicted[:, j], color="tab:red", lw=1, ls="--",
+                label=f"predicted (RMS error {rms:.3g} N m)")
+        ax.set_ylabel(f"{joint_names[j]}\n[N m]")
+        ax.legend(loc="best", fontsize="small")
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle(title)
+    return fig
+
+
+#: The unit of a base parameter, by the letters of its name.
+PARAMETER_UNITS = ("in SI units by name (kg m^2 for inertia XX..ZZ, kg m for first moments "
+                   "MX..MZ, kg for M, N m for Coulomb friction FC, N m s/rad for viscous "
+                   "friction FV, N and N s/m on a prismatic joint, a regrouped `...R` "
+                   "parameter in its first term's unit)")
+#: The unit of a friction model's extra term (:mod:`._model`), by the letters of its name.
+MODEL_UNITS = ("extra terms in N m for a torque offset OFF, N m s^2/rad^2 for velocity-squared "
+               "friction FQ, kg m^2 for a rotor inertia IA, N m s/rad and N m for a coupled "
+               "motor's viscous and Coulomb friction FVM, FCM (IA, FVM, FCM motor-side)")
+#: The units of the terms beyond :data:`MODEL_UNITS`, written where the model has them.
+MORE_UNITS = {"FS": "N m for Stribeck's excess friction FS",
+              "FL": "N m per N m transmitted for friction growing with the load FL",
+              "FLV": "s/rad for viscous friction growing with the load FLV"}
+
+
+def model_units(names: Sequence[str]) -> str:
+    """:data:`MODEL_UNITS`, and the units of :data:`MORE_UNITS` that ``names`` use."""
+    prefixes = {n.rstrip("0123456789") for n in names}
+    more = [unit for prefix, unit in MORE_UNITS.items() if prefix in prefixes]
+    return MODEL_UNITS + "".join(f"; {unit}" for unit in more)
+
+
+def stage_lines(settings: dict) -> list[str]:
+    """What the fit's stages did (:mod:`~.._fit._fit`): the nonlinear parameters it
+    searched (value, standard deviation, unit, on a bound; the method and its trials)
+    and where the load of friction growing with it came from."""
+    lines = []
+    searched = settings.get("searched") or {}
+    if searched:
+        def one(name: str, s: dict) -> str:
+            std = "inf" if s["std"] is None else f"{s['std']:.2g}"
+            return (f"{name} = {s['value']:.4g} +- {std} {s['unit']}"
+                    f"{' (on a bound)' * s['at_bound']}")
+
+        found = ", ".join(one(name, s) for name, s in searched["parameters"].items())
+        lines.append(f"nonlinear parameters searched ({searched['method']}, "
+                     f"{searched['evaluations']} trials): {found}")
+    load = settings.get("load")
+    if load:
+        if "settled" in load:
+            state = "settled" if load["settled"] else "NOT settled"
+            lines.append(f"friction growing with the load: the fit's own rigid-body torque "
+                         f"after {load['iterations']} fits ({state})")
+        else:
+            lines.append("friction growing with the load: the rigid-body torque of a least-"
+                         "squares fit without it")
+    return ["", *lines] if lines else []
+
+
+#: The note under the first metrics table (:mod:`._metrics` defines the figures).
+METRICS_NOTE = columns_note(
+    ("joint", "one row per joint, `overall` for all joints together"),
+    ("RMS error [N m]", "root mean square over the samples of measured - predicted torque "
+     "(N on a prismatic joint)"),
+    ("relative RMS [%]", "100 RMS error / RMS of the measured torque (overall: 100 norm(e) / "
+     "norm(tau), Frobenius norms)"),
+    ("NRMS range [%]", "100 RMS error / (max - min of the measured torque), overall the "
+     "mean over the joints"),
+    ("NRMS limits [%]", "100 RMS error / (2 torque limit), the error against the whole "
+     "range [-limit, limit], overall the mean over the joints (FloBaRoID's figure), `-` "
+     "without limits"))
+#: The note under a later metrics table.
+SAME_COLUMNS = "Columns as in the fit table above."
+
+
+def metrics_table(metrics: Metrics, joint_names: Sequence[str]) -> str:
+    """Markdown table of ``metrics``: one row per joint and one for the overall figures
+    (the numbers of :meth:`~._metrics.Metrics.table`; columns in :data:`METRICS_NOTE`)."""
+    limits = metrics.nrms_limits_percent_per_joint
+    rows = [[name, f"{metrics.rms[j]:.4g}", f"{metrics.relative_rms_percent[j]:.3f}",
+             f"{metrics.nrms_range_percent[j]:.3f}",
+             "-" if limits is None else f"{limits[j]:.4f}"]
+            for j, name in enumerate(joint_names)]
+    rows.append(["overall", f"{metrics.rms_overall:.4g}",
+                 f"{metrics.relative_rms_percent_overall:.3f}",
+                 f"{metrics.nrms_range_percent_mean:.3f}",
+                 "-" if metrics.nrms_limits_percent is None
+                 else f"{metrics.nrms_limits_percent:.4f}"])
+    return markdown_table(["joint", "RMS error [N m]", "relative RMS [%]", "NRMS range [%]",
+                           "NRMS limits [%]"], rows, align=["left"] + ["right"] * 4)
+
+
+def _cv_error(cv: CrossValidation) -> str:
+    measure = cv.measure
+    what = ("NRMS over the torque limits" if measure == "nrms_limits_percent"
+            else "relative RMS error")
+    return (f"mean +- standard error over the splits of each split's predicted samples' "
+            f"{what} (`{measure}`)")
+
+
+#: What each kind of split predicts the error of.
+PART_MEANING = {"phase folds": "motions like the fitted one", "speed splits": "faster ones",
+                "recording folds": "another recording", "given folds": "the given folds"}
+
+
+def _described(cv: CrossValidation) -> str:
+    """What a validation did, for the report."""
+    text = cv.validation.get("description", cv.validation["kind"])
+    if cv.period_s is not None:
+        text += f"; period {cv.period_s:.4g} s"
+    elif cv.validation["kind"] == "phase folds":
+        text += "; contiguous folds, the motion does not repeat"
+    return text
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class IdentificationReport:
+    """An identification judged on its own data and, when given, on held-out data.
+
+    ``data`` and ``held_out`` are :class:`~sedsabso_jax.Measurements`; ``fit`` and
+    ``validation`` their :class:`~._metrics.Metrics` (``validation`` None without held-out
+    data); ``predicted`` the predicted torques of each; ``cross_validation`` the chosen
+    setting's :class:`~._validation.CrossValidation` on ``data`` and ``selection`` the
+    :class:`~._validation.Selection` it came from, ``prior_selection`` the
+    :class:`~._validation.PriorSelection` of a physical fit's pull to the prior (each None
+    when not run).
+    """
+
+    ident: Identification
+    data: Measurements
+    held_out: Measurements | None
+    limits: Limits
+    fit: Metrics
+    validation: Metrics | None
+    predicted: tuple[np.ndarray, np.ndarray | None]
+    cross_validation: CrossValidation | None = None
+    selection: Selection | None = None
+    prior_selection: PriorSelection | None = None
+    #: how far ``held_out`` goes beyond ``data`` (:func:`~._extrapolation.extrapolation`)
+    extrapolation: Extrapolation | None = None
+
+    @classmethod
+    def evaluate(cls, ident: Identification, data: Measurements | Sequence[Measurements],
+                 held_out: Measurements | None = None, limits: Limits = None, *,
+                 cross_validation: CrossValidation | None = None,
+                 selection: Selection | None = None,
+                 prior_selection: PriorSelection | None = None) -> IdentificationReport:
+        """Predict the torques of ``data`` (one recording or several; their own torque
+        offsets where the model has one per recording) and of ``held_out``, and compare;
+        with ``held_out``, measure how far it goes beyond ``data``
+        (:func:`~._extrapolation.extrapolation`) and warn when a joint is beyond the
+        thresholds."""
+        recordings = [data] if isinstance(data, Measurements) else list(data)
+        data = joined(recordings)
+        beyond = None if held_out is None else extrapolation(
+            data, held_out, joint_names=ident.model.robot.joint_names, warn=True)
+        index = stacked(recordings)[-1] if len(recordings) > 1 else None
+        fit_pred = ident.model.predict(ident.values, data.q, data.qd, data.qdd, index)
+        val_pred = None if held_out is None else ident.predict(held_out.q, held_out.qd,
+                                                              held_out.qdd)
+        return cls(ident, data, held_out, limits,
+                   validation_metrics(data.tau, fit_pred, limits),
+                   None if held_out is None else validation_metrics(
+                       held_out.tau, val_pred, limits),  # type: ignore[arg-type]
+                   (fit_pred, val_pred), cross_validation, selection, prior_selection,
+                   beyond)
+
+    def text(self) -> str:
+        """The parameters and per-joint metrics as markdown tables, each with a note that
+        defines its columns."""
+        ident, robot = self.ident, self.ident.model.robot
+        joints = robot.joint_names
+        std = ident.std if ident.std is not None else np.full(len(ident.values), np.nan)
+        relative = relative_std_percent(std, ident.values)
+        rows = [[str(i), name, f"{value:.6g}", f"{sd:.3g}", f"{rel:.3g}"]
+                for i, (name, value, sd, rel)
+                in enumerate(zip(ident.names, ident.values, std, relative), 1)]
+        lines = [f"{robot.name}: {len(ident.names)} parameters identified by {ident.method} "
+                 f"(friction {ident.model.friction}) from {self.data.n_samples} samples of "
+                 f"{self.data.source}", "",
+                 markdown_table(["#", "parameter", "value", "std", "relative std [%]"], rows),
+                 "", columns_note(
+                     ("#", "row number"),
+                     ("parameter", "a base parameter (Eq. 3-4, `R` where others are "
+                      "regrouped onto it) or an extra term of the friction model"),
+                     ("value", f"the identified value {PARAMETER_UNITS}, "
+                      f"{model_units(ident.names)}"),
+                     ("std", "its standard deviation in the value's unit, from the residual "
+                      "covariance s^2 (W^T W)^-1 of the weighted rows W (exact for OLS and WLS "
+                      "with independent errors and the model right; a linearisation that "
+                      "ignores the constraints and the prior of a physical fit; `inf`: not "
+                      "determined by the data)"),
+                     ("relative std [%]", "100 std / |value|")),
+                 *stage_lines(ident.settings),
+                 "", "fit (identification data):", "", metrics_table(self.fit, joints), "",
+                 METRICS_NOTE]
+        if self.cross_validation is not None:
+            cv = self.cross_validation
+            lines += ["", f"predicted error on new motions ({_described(cv)}):", "",
+                      metrics_table(cv.metrics, joints), "", SAME_COLUMNS, "",
+                      f"validated error ({cv.measure}): {cv.score:.4f} +- "
+                      f"{cv.standard_error:.4f} (mean and standard error over "
+                      f"{len(cv.fold_scores)} splits): the error to expect on new motions"]
+            if len(cv.part_scores) > 1:
+                lines += ["", "by kind of split: " + "; ".join(
+                    f"{k} {v:.4f} ({PART_MEANING.get(k, k)})"
+                    for k, v in cv.part_scores.items())]
+        if self.selection is not None:
+            sel = self.selection
+            parts = sel.parts if len(sel.parts) > 1 else ()
+            lines += ["", f"chosen by {' and '.join(sel.parts)} (the simplest whose "
+                          f"split-by-split excess over the lowest is within one standard "
+                          f"error):", "",
+                      markdown_table(["method", "sigma", "physical", "friction", "parameters",
+                                      "error [%]", *(f"{k} [%]" for k in parts), "choice"],
+                                     sel.table()),
+                      "", columns_note(
+                          ("method", "the estimator (`identify --method`)"),
+                          ("sigma", "what each joint's rows are divided by (`equal`: "
+                           "nothing, `residual`: the RMS of its OLS residual, Gautier's "
+                           "two-step WLS, `limits`: its torque limit)"),
+                          ("physical", "`yes`: physically consistent parameters "
+                           "(`identify --physical`), friction coefficients >= 0"),
+                          ("friction", "the torque model's terms (`identify --friction`)"),
+                          ("parameters", "the number of parameters the model identifies"),
+                          ("error [%]", _cv_error(sel.cross_validation)),
+                          *((f"{k} [%]", f"the mean over the {k} alone") for k in parts),
+                          ("choice", "`chosen` (the simplest, fewest parameters then "
+                           "physically consistent, whose split-by-split excess over the "
+                           "lowest is within one standard error) or `lowest` (the lowest "
+                           "error)"))]
+        if self.prior_selection is not None:
+            lines += ["", "pull toward the a-priori parameters chosen by validation (the "
+                          "strongest within one standard error of the lowest):", "",
+                      markdown_table(["prior strength", "CV error [%]", "choice"],
+                                     self.prior_selection.table()),
+                      "", columns_note(
+                          ("prior strength", "weight of the pull toward the a-priori "
+                           "parameters, in multiples of the data term's mean curvature"),
+                          ("CV error [%]", _cv_error(self.prior_selection.cross_validation)),
+                          ("choice", "`chosen` (the strongest pull within one standard error "
+                           "of the lowest) or `lowest` (the lowest CV error)"))]
+        if self.validation is not None and self.held_out is not None:
+            lines += ["", f"validation ({self.held_out.source}, {self.held_out.n_samples} "
+                          f"samples):", "", metrics_table(self.validation, joints), "",
+                      SAME_COLUMNS]
+        if self.extrapolation is not None:
+            lines += ["", "extrapolation (how far the validation data go beyond the "
+                          "identification data, per joint):", "", self.extrapolation.table(),
+                      "", self.extrapolation.note()]
+            message = self.extrapolation.message()
+            if message is not None:
+                lines += ["", f"warning: {message}"]
+        if self.limits is None:
+            lines += ["", "NRMS over torque limits: no limits known for this robot"]
+        return "\n".join(lines)
+
+    def document(self, settings: dict) -> dict:
+        """The JSON document: parameters, fit and validation metrics, ``settings`` merged
+        with the identification's own."""
+        ident = self.ident
+        return jsonable({
+            "base_parameters": {"names": ident.names, "values": ident.values,
+                                "std": ident.std,
+                                "relative_std_percent": ident.relative_std_percent},
+            "fit": {**self.fit.as_dict(), "residual": ident.fit},
+            "validation": None if self.validation is None else self.validation.as_dict(),
+            "cross_validation": None if self.cross_validation is None else {
+                **self.cross_validation.as_dict(),
+                "selection": None if self.selection is None else self.selection.as_dict(),
+                "prior_strength": None if self.prior_selection is None
+                else self.prior_selection.as_dict()},
+            "settings": {**settings, **ident.settings},
+            "extrapolation": None if self.extrapolation is None
+            else self.extrapolation.as_dict(),
+        })
+
+    def figures(self) -> dict:
+        """``{file name: figure}``: measured against predicted torques per data set."""
+        ident, robot = self.ident, self.ident.model.robot
+        sets: list[tuple[str, Measurements, np.ndarray | None, str]] = [
+            ("torques_fit.png", self.data, self.predicted[0], "identification data")]
+        if self.held_out is not None:
+            sets.append(("torques_validation.png", self.held_out, self.predicted[1],
+                         "held-out data"))
+        # pred is None only for held-out data, which is then not in sets
+        method = ident.method + (", physically consistent" if ident.full_params is not None
+                                 else "")
+        return {name: figure_torques(d.times, d.tau, pred,  # type: ignore[arg-type]
+                                     robot.joint_names, f"{robot.name}, {method}: {label}")
+                for name, d, pred, label in sets}
+
+    def write(self, settings: dict, out_dir: PathLike | None = None,
+              json_path: PathLike | None = None, urdf_path: PathLike | None = None,
+              urdf_source: PathLike | None = None) -> list[str]:
+        """Write the figures and ``identification.json`` into ``out_dir`` (created if
+        missing), the JSON also to ``json_path`` and the identified robot's URDF to
+        ``urdf_path`` (``urdf_source`` updated, if given: :meth:`Identification.urdf`;
+        their directories created); everything is rendered before the first file is
+        written. Returns the paths written."""
+        document = self.document(settings)
+        urdf = self.ident.urdf(urdf_source) if urdf_path is not None else None
+        figures = self.figures() if out_dir is not None else {}
+        written = []
+        if out_dir is not None:
+            os.makedirs(out_dir, exist_ok=True)
+            for name, fig in figures.items():
+                save_figure(fig, os.path.join(out_dir, name))
+                written.append(os.path.join(out_dir, name))
+            write_json(os.path.join(out_dir, "identification.json"), document)
+            written.append(os.path.join(out_dir, "identification.json"))
+        if json_path is not None:
+            os.makedirs(os.path.dirname(os.path.abspath(json_path)), exist_ok=True)
+            write_json(json_path, document)
+            written.append(os.fspath(json_path))
+        if urdf_path is not None and urdf is not None:
+            os.makedirs(os.path.dirname(os.path.abspath(urdf_path)), exist_ok=True)
+            write_text(urdf_path, urdf)
+            written.append(os.fspath(urdf_path))
+        return written

@@ -1,0 +1,133 @@
+"""The command's default as one call: choose the torque model and the estimator by
+validation, then (physically consistent fits) the pull to the prior, then fit, and
+judge the fit on held-out data::
+
+    report = select_and_identify(robot, data, held_out=other_run, limits=limits)
+    print(report.text())          # what `sedsabso-jax identify` prints
+    report.write(settings, out_dir, json_path)
+
+``sedsabso-jax identify`` is this function with its flags turned into objects
+(:func:`~._choice.estimator_candidates` for ``--method`` and ``--weights``,
+:func:`~.._model._candidates.candidate_models` for ``--friction``); the rules between its
+options are stated once, in :class:`~._choice.Choice`."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from ...dynamics._robot import Robot
+from .._estimators._estimator import Estimator, Limits, ProgressCallback
+from .._fit._identify import identify
+from .._model._candidates import candidate_models
+from .._model._torque_model import TorqueModel, model_of
+from .._options import one_or_more
+from .._recordings import Data, recordings_of
+from .._validation._selection import (
+    ESTIMATOR_CANDIDATES,
+    PRIOR_STRENGTHS,
+    choose_prior_strength,
+    select_model,
+)
+from .._validation._splits import Validation
+from ._choice import Choice, DefaultValidation
+from ._report import IdentificationReport
+
+
+class _Stages:
+    """One ``progress(label, done, total)`` over the stages of a call: each stage reports
+    its own fits (1..its total) and is told how many fits the stages after it make."""
+
+    def __init__(self, progress: ProgressCallback | None):
+        self.progress, self.done = progress, 0
+
+    def stage(self, later: int) -> ProgressCallback | None:
+        if self.progress is None:
+            return None
+        report, start = self.progress, self.done
+
+        def step(label: str, done: int, total: int) -> None:
+            self.done = start + done
+            report(label, self.done, start + total + later)
+
+        return step
+
+
+def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = None,
+                        limits: Limits = None,
+                        models: TorqueModel | Iterable[TorqueModel] | None = None,
+                        estimators: Estimator | Iterable[Estimator] | None = None,
+                        validation: Validation | DefaultValidation | None = DefaultValidation(),
+                        physical: bool | None = None, prior_strength: float | str = 0.0,
+                        progress: ProgressCallback | None = None) -> IdentificationReport:
+    """Identify ``robot`` from ``data`` as ``sedsabso-jax identify`` does by default.
+
+    1. Model choice: every estimator of ``estimators`` (default
+       :data:`~._validation.ESTIMATOR_CANDIDATES`; one :class:`~._fitting.Estimator` or a
+       sequence, e.g. :func:`estimator_candidates`), unconstrained and physically
+       consistent (``physical`` None; True: only physically consistent, False: only
+       unconstrained), with every torque model of ``models`` (default
+       :func:`~._model.candidate_models` of the robot) is scored by ``validation`` and the
+       simplest within one standard error of the lowest is kept
+       (:func:`~._validation.select_model`). The default, :class:`DefaultValidation`,
+       pools 5 folds of the motion's phase (leave one recording out for several
+       recordings), where the model interpolates, with :class:`~._splits.SpeedSplits`,
+       where it must extrapolate in speed as on a faster motion: its score is the error to
+       expect on new motions, and the report gives each part's too. With one candidate, it
+       is only validated (``validation=None``: not at all).
+    2. ``prior_strength``, a number or ``"cv"`` (chosen from
+       :data:`~._validation.PRIOR_STRENGTHS` by the same validation,
+       :func:`~._validation.choose_prior_strength`), pulls a physically consistent fit
+       toward the robot's a-priori parameters.
+    3. The fit on all of ``data``, judged on it, on the validation and on ``held_out``
+       (never used to choose or fit).
+
+    ``data``: a :class:`~sedsabso_jax.Measurements`, several (recordings of one rate,
+    fitted together; models with one torque offset per recording:
+    ``candidate_models(robot, recordings=len(data))``), or ``(times, q, qd, qdd, tau)``;
+    ``held_out`` likewise (one recording); ``limits``: per-joint torque limits (the NRMS
+    measure and the 1/limit weighting; candidates weighting by them are skipped
+    without); ``progress(label, done, total)``: called after each fit, ``done`` running
+    1..``total`` over the whole call (None: quiet). The rules between the options are
+    :class:`Choice`'s. Returns the :class:`~._report.IdentificationReport` the command
+    prints (``text()``) and writes (``write(...)``)."""
+    held = None if held_out is None else recordings_of(robot, held_out)
+    if held is not None and len(held) > 1:
+        raise ValueError("held_out must be one recording")
+    recordings = recordings_of(robot, data)
+    models = candidate_models(robot) if models is None else tuple(
+        model_of(robot, m) for m in one_or_more(models, TorqueModel))
+    estimators = ESTIMATOR_CANDIDATES if estimators is None else one_or_more(estimators,
+                                                                             Estimator)
+    choice = Choice(validation, physical, prior_strength, len(models) * len(estimators),
+                    len(recordings), any(m.recordings > 1 for m in models))
+    estimators = choice.estimators(estimators)
+    chosen_by = choice.validation_of(recordings)
+    # the fits after the model choice, for the progress: the prior's validation, the fit
+    later = 1 + (len(PRIOR_STRENGTHS) * len(chosen_by.splits(recordings))
+                 if progress is not None and chosen_by is not None
+                 and choice.prior_strength == "cv"
+                 else 0)
+    stages = _Stages(progress)
+    selection = cv = None
+    if chosen_by is None:
+        estimator, model = estimators[0], models[0]
+    else:
+        selection = select_model(robot, recordings, models=models, estimators=estimators,
+                                 validation=chosen_by, limits=limits,
+                                 progress=stages.stage(later))
+        estimator, model = selection.estimator, selection.model
+        cv = selection.cross_validation
+    prior_selection = None
+    if choice.physical is True and choice.prior_strength == "cv":
+        prior_selection = choose_prior_strength(robot, recordings, estimator, model,
+                                                strengths=PRIOR_STRENGTHS,
+                                                validation=chosen_by,  # type: ignore[arg-type]
+                                                limits=limits, progress=stages.stage(1))
+        estimator, cv = prior_selection.estimator, prior_selection.cross_validation
+    ident = identify(robot, recordings, estimator, model, limits=limits)
+    if progress is not None:
+        progress("fit on all the data", stages.done + 1, stages.done + 1)
+    return IdentificationReport.evaluate(ident, recordings, None if held is None else held[0],
+                                         limits,
+                                         cross_validation=cv, selection=selection,
+                                         prior_selection=prior_selection)

@@ -1,0 +1,172 @@
+"""Least squares on the (weighted) rows and its physically consistent form, the
+identification's estimators of normal equations (interface: :mod:`._estimator`).
+
+- :class:`OLS`: least squares by column-pivoted QR (:mod:`sedsabso_jax.optim._linear`);
+- :class:`WLS`: the same on rows divided by each joint's sigma, by default Gautier's
+  two-step estimate from an OLS pass's residuals;
+- :class:`PhysicallyConsistent`: least squares over full link parameters a real body can
+  have (:mod:`._physical`; Clarabel through cvxpy), optionally pulled toward a prior.
+
+Each is built with its options, converted and checked there::
+
+    WLS("limits"), PhysicallyConsistent(OLS(), prior_strength=1e-4)
+
+OLS and WLS are the two final forms of :class:`AbstractLeastSquares` (they differ in the
+default weighting only).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, ClassVar
+
+import equinox as eqx
+import numpy as np
+from jaxtyping import ArrayLike, Float
+
+from ._estimator import (
+    Estimator,
+    EstimatorFit,
+    FitProblem,
+    Limits,
+    check_sigma,
+    check_weighting,
+    no_physical_form,
+    weigh,
+    weighting_settings,
+)
+from .._model._torque_model import TorqueModel
+from .._options import as_float, as_floats, check_number
+from ._physical import PSD_MARGIN, fit_physical
+
+#: An estimator's ``sigma`` as kept: None, a weighting's name, or one number per joint.
+SigmaOption = str | tuple[float, ...] | None
+
+
+def check_prior(prior: object) -> None:
+    """That a prior (as :func:`~._options.as_floats` converted it) is None (the robot's
+    own parameters) or finite full parameters (12 per link; the count is checked against
+    the robot)."""
+    if prior is not None and not (isinstance(prior, tuple) and np.all(np.isfinite(prior))):
+        raise ValueError(f"prior must be finite full parameters (12 per link), got shape "
+                         f"{np.shape(prior)}")  # type: ignore[call-overload]
+
+
+def prior_of(prior: Float[ArrayLike, " p"] | Sequence[float] | None, model: TorqueModel
+             ) -> Float[np.ndarray, " p"]:
+    """The full a-priori parameters: ``prior``, or the robot's own; checked."""
+    robot = model.robot
+    p = np.asarray(robot.params if prior is None else prior, dtype=float)
+    if p.shape != (robot.n_params,) or not np.all(np.isfinite(p)):
+        raise ValueError(f"prior must be {robot.n_params} finite full parameters (12 per "
+                         f"link), got shape {p.shape}")
+    return p
+
+
+class AbstractLeastSquares(Estimator):
+    """Least squares on the (weighted) rows by column-pivoted QR, the minimum-norm
+    solution when the rows leave columns unidentifiable: :class:`OLS` and :class:`WLS`."""
+
+    physical: ClassVar[bool] = False
+    costly: ClassVar[bool] = False
+    normal_equations: ClassVar[bool] = True
+    norm: ClassVar[int] = 2
+
+    def fit(self, problem: FitProblem) -> EstimatorFit:
+        rows = weigh(problem, self.sigma, default=self.default_weighting, factor=True)
+        return EstimatorFit(rows.weighted_factor.solve(), None, rows.sigma, rows.factor0, rows.W,
+                            rows.b, None, {})
+
+    def check(self, model: TorqueModel, limits: Limits) -> None:
+        check_weighting(self, model, limits)
+
+    def settings(self) -> dict:
+        return weighting_settings(self)
+
+    def physically_consistent(self) -> PhysicallyConsistent:
+        return PhysicallyConsistent(self)
+
+    def __check_init__(self):
+        check_sigma(self.sigma)
+
+
+class OLS(AbstractLeastSquares):
+    """Ordinary least squares; ``sigma`` weights the rows (:func:`~._fitting.weigh`;
+    None: equal weights)."""
+
+    sigma: SigmaOption = eqx.field(default=None, converter=as_floats)
+    name: ClassVar[str] = "OLS"
+    default_weighting: ClassVar[str] = "equal"
+    registered_as: ClassVar[dict[str, dict[str, Any]]] = {"OLS": {}}
+
+
+class WLS(AbstractLeastSquares):
+    """Weighted least squares: rows divided by each joint's ``sigma``; ``"residual"``
+    (the default, also for None) is Gautier's two-step estimate."""
+
+    sigma: SigmaOption = eqx.field(default="residual", converter=as_floats)
+    name: ClassVar[str] = "WLS"
+    default_weighting: ClassVar[str] = "residual"
+    registered_as: ClassVar[dict[str, dict[str, Any]]] = {"WLS": {}}
+
+
+class PhysicallyConsistent(Estimator):
+    """Least squares (``least_squares``: :class:`OLS` or :class:`WLS`, whose weighting and
+    name it takes) over full link parameters a real body can have: every link's
+    pseudo-inertia positive definite, friction and armature coefficients >= 0
+    (:mod:`._physical`; a semidefinite programme solved by Clarabel). It returns the full
+    parameters too (:meth:`~._identify.Identification.urdf`).
+
+    ``prior`` (full parameters, default the robot's own) is pulled toward with weight
+    ``prior_weight`` plus ``prior_strength`` times the data term's mean curvature (the
+    scale-free form; :func:`~._validation.choose_prior_strength` chooses it)."""
+
+    least_squares: AbstractLeastSquares = OLS()
+    prior: tuple[float, ...] | None = eqx.field(default=None, converter=as_floats)
+    prior_weight: float = eqx.field(default=0.0, converter=as_float)
+    prior_strength: float = eqx.field(default=0.0, converter=as_float)
+    physical: ClassVar[bool] = True
+    costly: ClassVar[bool] = False
+    normal_equations: ClassVar[bool] = True
+    norm: ClassVar[int] = 2
+
+    def __check_init__(self):
+        if not isinstance(self.least_squares, AbstractLeastSquares):
+            raise ValueError(f"least_squares must be OLS(...) or WLS(...): a physically "
+                             f"consistent fit is a least-squares fit, got {self.least_squares!r}")
+        check_prior(self.prior)
+        check_number("prior_weight", self.prior_weight)
+        check_number("prior_strength", self.prior_strength)
+
+    @property
+    def name(self) -> str:
+        return self.least_squares.name
+
+    @property
+    def sigma(self) -> SigmaOption:
+        return self.least_squares.sigma
+
+    @property
+    def default_weighting(self) -> str:
+        return self.least_squares.default_weighting
+
+    def settings(self) -> dict:
+        return {**weighting_settings(self), "prior_weight": self.prior_weight,
+                "prior_strength": self.prior_strength, "psd_margin": PSD_MARGIN}
+
+    def check(self, model: TorqueModel, limits: Limits) -> None:
+        check_weighting(self, model, limits)
+        prior_of(self.prior, model)
+
+    def physically_consistent(self) -> PhysicallyConsistent:
+        return self
+
+    def fit(self, problem: FitProblem) -> EstimatorFit:
+        ls = self.least_squares
+        rows = weigh(problem, ls.sigma, default=ls.default_weighting, factor=True)
+        fit = fit_physical(problem.model, rows.weighted_factor, prior_of(self.prior, problem.model),
+                           self.prior_weight, self.prior_strength)
+        extra = {"physical_fit": {"solver": fit.solver, "status": fit.status,
+                                  "iterations": fit.iterations, "seconds": fit.seconds}}
+        return EstimatorFit(np.asarray(fit.values, dtype=float), fit.full_params, rows.sigma,
+                            rows.factor0, rows.W, rows.b, None, extra)

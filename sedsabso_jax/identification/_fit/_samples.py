@@ -1,0 +1,125 @@
+"""The samples a fit reads (:class:`Samples`): one or several recordings stacked, or a
+subset of them (a validation's split), with what is computed on them kept for the next
+fit: the base regressor's rows, a model's rows and their normal equations."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+from .._estimators._estimator import FitProblem
+from .._estimators._normal_equations import NormalEquations
+from .._model._torque_model import TorqueModel
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Samples:
+    """The samples a fit reads, each ``(T, n)`` (``recording``: each sample's recording,
+    ``(T,)``, or None), in time order within each recording.
+
+    A :meth:`subset` remembers the samples it was taken from (``whole``, and the indices
+    ``keep`` into them): a term that carries a state along the samples integrates it on
+    the whole and takes the subset's rows. A subset is ``compressed``: a least-squares
+    estimator fits it through its normal equations (a validation's training samples,
+    whose fits are judged by their predictions only), formed from the whole's where the
+    subset is most of it and the whole's rows of that model are at hand."""
+
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    tau: np.ndarray
+    recording: np.ndarray | None = None
+    compressed: bool = False
+    whole: Samples | None = None
+    keep: np.ndarray | None = None
+    _kept: dict = dataclasses.field(default_factory=dict, repr=False)
+
+    def _cached(self, kind: str, owner: Any, make) -> Any:
+        """``make()``, kept per (``kind``, ``owner``); ``owner`` is kept alive with it."""
+        key = (kind, id(owner))
+        if key not in self._kept:
+            self._kept[key] = (owner, make())
+        return self._kept[key][1]
+
+    @property
+    def root(self) -> Samples:
+        """The whole samples (itself unless a subset)."""
+        return self if self.whole is None else self.whole
+
+    def base_rows(self, model: TorqueModel) -> np.ndarray:
+        """The base regressor's rows ``(T, n, b)`` (computed once, on the whole)."""
+        if self.whole is not None:
+            return self.whole.base_rows(model)[self.keep]
+        return self._cached("base", model.base, lambda: np.asarray(
+            model.base.regressor(self.q, self.qd, self.qdd)))
+
+    def _rows(self, model: TorqueModel, every_column: bool) -> np.ndarray:
+        whole = None if self.whole is None else (self.whole.q, self.whole.recording)
+        return model.regressor(self.q, self.qd, self.qdd, self.recording,
+                               base_rows=self.base_rows(model), every_column=every_column,
+                               whole=whole, keep=self.keep)
+
+    def rows(self, model: TorqueModel, every_column: bool = False, cache: bool = True
+             ) -> np.ndarray:
+        """``model``'s regressor at these samples, ``(T, n, d)`` (``every_column``: as
+        :meth:`~sedsabso_jax.TorqueModel.regressor`'s): the whole's rows of the model,
+        taken, where they were computed; on the whole, kept (``cache``)."""
+        if every_column:
+            return self._rows(model, True)
+        found = self.root._kept.get(("rows", id(model)))
+        if found is not None:
+            return found[1] if self.whole is None else found[1][self.keep]
+        if self.whole is not None or not cache:
+            return self._rows(model, False)
+        return self._cached("rows", model, lambda: self._rows(model, False))
+
+    def subset(self, keep: np.ndarray) -> Samples:
+        """The samples ``keep`` (a mask or indices) selects: a validation's split,
+        ``compressed``; one object per ``keep`` object."""
+        root = self.root
+        if self.whole is None and ("subset", id(keep)) in self._kept:
+            return self._kept[("subset", id(keep))][1]
+        index = np.arange(self.q.shape[0])[keep]
+        whole_index = index if self.keep is None else np.asarray(self.keep)[index]
+        out = Samples(self.q[keep], self.qd[keep], self.qdd[keep], self.tau[keep],
+                      None if self.recording is None else self.recording[keep], True,
+                      whole=root, keep=whole_index)
+        if self.whole is None:
+            self._kept[("subset", id(keep))] = (keep, out)
+        return out
+
+    def normal_equations(self, model: TorqueModel) -> NormalEquations:
+        """The normal equations of ``model``'s rows at these samples: a subset that is
+        most of the whole, whose rows of ``model`` the whole has, takes the whole's less
+        those of the samples it leaves out."""
+        whole = self.whole
+        rows = None if whole is None else whole._kept.get(("rows", id(model)))
+        if whole is None or rows is None or 2 * len(self.keep) <= whole.q.shape[0]:
+            return self._cached("normal", model, lambda: NormalEquations.of(self.rows(model),
+                                                                            self.tau))
+        out = np.ones(whole.q.shape[0], dtype=bool)
+        out[self.keep] = False
+        everything = whole.normal_equations(model)
+        return everything - NormalEquations.of(rows[1][out], whole.tau[out])
+
+    def problem(self, model: TorqueModel, limits: np.ndarray | None, warn: bool = True
+                ) -> FitProblem:
+        """What an estimator fits: the compressed rows of a subset (kept per model and
+        limits), or the rows themselves."""
+        if self.compressed:
+            key = None if limits is None else np.asarray(limits).tobytes()
+            found = self._cached("problems", model, dict)
+            if key not in found:
+                found[key] = self.normal_equations(model).problem(model, limits)
+            return found[key]
+        return FitProblem.of(model, self.rows(model), self.tau, limits, warn)
+
+    def predict(self, model: TorqueModel, values: np.ndarray) -> np.ndarray:
+        """``model``'s torques with ``values`` at these samples (as
+        :meth:`~sedsabso_jax.TorqueModel.predict`, from the rows computed so far)."""
+        values = np.asarray(values, dtype=float)
+        if values.shape != (model.dim,):
+            raise ValueError(f"values must have shape ({model.dim},), got {values.shape}")
+        return self.rows(model.reading(values, only=lambda term: term.waiting)) @ values

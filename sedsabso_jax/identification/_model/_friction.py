@@ -1,0 +1,101 @@
+"""Friction of each joint's own velocity beyond the base regressor's viscous and Coulomb
+friction: :class:`Quadratic`, :class:`SmoothCoulomb` and :class:`Stribeck`."""
+
+# no `from __future__ import annotations`: equinox reads the AbstractVar annotations
+import abc
+from types import ModuleType
+from typing import Any, ClassVar
+
+import equinox as eqx
+import numpy as np
+
+from ._scales import AbstractVelocityScale, as_scale
+from ._term import AbstractTerm, ModelView, Signals, diagonal
+
+#: Velocity scale (rad/s or m/s) of :class:`SmoothCoulomb` unless told.
+SMOOTH_VELOCITY = 0.02
+#: Stribeck velocity (rad/s or m/s) of :class:`Stribeck` unless told.
+STRIBECK_VELOCITY = 0.1
+
+
+class AbstractJointFriction(AbstractTerm):
+    """A friction term of each joint's own velocity: one column per joint, ``PREFIXj``,
+    with :meth:`torque` on the joint's own row."""
+
+    prefix: eqx.AbstractClassVar[str]
+
+    @abc.abstractmethod
+    def torque(self, s: Signals) -> Any:
+        """Each joint's column value at the samples of ``s``, ``(..., n)``."""
+
+    def names(self, model: ModelView) -> tuple[str, ...]:
+        return tuple(f"{self.prefix}{j + 1}" for j in range(model.robot.n_joints))
+
+    def columns(self, model: ModelView, s: Signals) -> Any:
+        return diagonal(self.torque(s), model.robot.n_joints, s.xp)
+
+
+class Quadratic(AbstractJointFriction):
+    """``FQ_j qd_j |qd_j|``: friction growing with the velocity squared (a lubricant's
+    drag at speed), ``>= 0`` for a physical body."""
+
+    name: ClassVar[str] = "quadratic"
+    prefix: ClassVar[str] = "FQ"
+    nonnegative: ClassVar[bool] = True
+
+    def torque(self, s: Signals) -> Any:
+        return s.qd * s.xp.abs(s.qd)
+
+
+class SmoothCoulomb(AbstractVelocityScale):
+    """Coulomb friction without the jump at rest: ``tanh(qd_j / velocity)`` in place of
+    ``sign(qd_j)`` in each joint's Coulomb column (``velocity`` in rad/s or m/s, > 0:
+    one, one per joint, or with ``fitted=True`` one per joint searched by the fit); no
+    columns of its own."""
+
+    velocity: float | tuple[float, ...] = eqx.field(default=SMOOTH_VELOCITY,
+                                                    converter=as_scale)
+    fitted: bool = False
+    name: ClassVar[str] = "smooth"
+    nonnegative: ClassVar[bool] = False
+    symbol: ClassVar[str] = "v_smooth"
+    default_scale: ClassVar[float] = SMOOTH_VELOCITY
+
+    def names(self, model: ModelView) -> tuple[str, ...]:
+        if None in model.base.joint_columns("FC"):
+            raise ValueError("the smooth Coulomb term needs every joint's Coulomb column in "
+                             "the base set")
+        self.per_joint(model.robot.n_joints)
+        return ()
+
+    def columns(self, model: ModelView, s: Signals) -> Any:
+        return s.xp.zeros(s.batch + (model.robot.n_joints, 0))
+
+    def coulomb(self, qd: Any, xp: ModuleType = np) -> Any:
+        return xp.tanh(qd / self.per_joint(qd.shape[-1], xp))
+
+
+class Stribeck(AbstractVelocityScale):
+    """``FS_j exp(-(qd_j / velocity)^2) c_j(qd)``: the friction above Coulomb's that
+    a joint shows near rest and loses as it speeds up (Stribeck's curve; ``FS_j >= 0``,
+    the static friction's excess), ``velocity`` the Stribeck velocity (rad/s or m/s,
+    > 0: one, one per joint, or fitted), ``c_j`` the model's Coulomb shape. Its columns
+    are ``FS1..``."""
+
+    velocity: float | tuple[float, ...] = eqx.field(default=STRIBECK_VELOCITY,
+                                                    converter=as_scale)
+    fitted: bool = False
+    name: ClassVar[str] = "stribeck"
+    nonnegative: ClassVar[bool] = True
+    symbol: ClassVar[str] = "v_stribeck"
+    default_scale: ClassVar[float] = STRIBECK_VELOCITY
+
+    def names(self, model: ModelView) -> tuple[str, ...]:
+        n = model.robot.n_joints
+        self.per_joint(n)
+        return tuple(f"FS{j + 1}" for j in range(n))
+
+    def columns(self, model: ModelView, s: Signals) -> Any:
+        xp, n = s.xp, model.robot.n_joints
+        v = self.per_joint(n, xp)
+        return diagonal(xp.exp(-(s.qd / v) ** 2) * s.coulomb, n, xp)

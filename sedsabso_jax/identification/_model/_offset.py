@@ -1,0 +1,42 @@
+"""A torque sensor's zero: :class:`Offset`, one per joint, or one per joint and
+recording."""
+
+# no `from __future__ import annotations`: equinox reads the AbstractVar annotations
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ._term import AbstractTerm, ModelView, Signals
+
+
+class Offset(AbstractTerm):
+    """``OFF_j``: a constant torque per joint (a torque sensor's zero). With a model of
+    ``R > 1`` recordings, one per joint and recording, ``OFFj.r``: rows of recording ``r``
+    carry 1 in column ``OFFj.r``, rows of no recording (new motions) ``1/R`` in each,
+    the offsets' mean."""
+
+    name: ClassVar[str] = "offset"
+    nonnegative: ClassVar[bool] = False
+
+    def names(self, model: ModelView) -> tuple[str, ...]:
+        n, R = model.robot.n_joints, model.recordings
+        if R > 1:
+            return tuple(f"OFF{j + 1}.{r + 1}" for j in range(n) for r in range(R))
+        return tuple(f"OFF{j + 1}" for j in range(n))
+
+    def columns(self, model: ModelView, s: Signals) -> Any:
+        n, R, batch = model.robot.n_joints, model.recordings, s.batch
+        if R == 1:
+            return np.broadcast_to(np.eye(n), batch + (n, n))
+        if s.recording is None:
+            share = np.full(batch + (R,), 1.0 / R)
+        else:
+            index = np.asarray(s.recording)
+            if index.shape != batch or index.dtype.kind not in "iu" or (
+                    index.size and (index.min() < 0 or index.max() >= R)):
+                raise ValueError(f"recording must hold one integer in [0, {R}) per sample "
+                                 f"{batch}, got shape {index.shape}")
+            share = (index[..., None] == np.arange(R)).astype(float)
+        E = np.zeros(batch + (n, n, R))  # joint j's row: its recording's indicator
+        E[..., np.arange(n), np.arange(n), :] = share[..., None, :]
+        return E.reshape(batch + (n, n * R))

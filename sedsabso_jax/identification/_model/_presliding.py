@@ -1,0 +1,54 @@
+"""Friction at rest: :class:`Presliding`, a term whose columns carry Dahl's presliding
+state along each recording (:mod:`._dahl`)."""
+
+# no `from __future__ import annotations`: equinox reads the AbstractVar annotations
+from typing import Any, ClassVar
+
+import equinox as eqx
+import jax.numpy as jnp
+
+from ._dahl import dahl_state, presliding_state
+from ._scales import AbstractScale, as_scale
+from ._term import ModelView, Signals, diagonal
+
+#: Characteristic displacement (rad or m) of :class:`Presliding` unless told.
+PRESLIDING_DISPLACEMENT = 0.002
+
+
+class Presliding(AbstractScale):
+    """``FP_j z_j``: friction that a joint holds at rest and after a reversal builds up
+    over a displacement, Dahl's model (:mod:`._dahl`): ``z_j`` the presliding state,
+    integrated along the recorded positions (``dz/dq = (1 - z sign(qd)) / q_c``), each
+    recording from ``z = 0``, ``FP_j >= 0`` (N m or N) the friction it saturates at.
+    Beside the Coulomb column ``FC_j sign(qd_j)``, which it equals in steady sliding, it
+    adds what sliding friction does not predict: the torque held while the joint stands
+    still and the gradual reversal. ``displacement`` is ``q_c`` (rad or m, > 0: one, one
+    per joint, or with ``fitted=True`` one per joint searched by the fit within
+    :attr:`bounds`). The columns read each recording's samples in time order, whole: a
+    subset's rows are the whole recording's, taken."""
+
+    displacement: float | tuple[float, ...] = eqx.field(default=PRESLIDING_DISPLACEMENT,
+                                                        converter=as_scale)
+    fitted: bool = False
+    name: ClassVar[str] = "presliding"
+    nonnegative: ClassVar[bool] = True
+    #: The displacements' search box (rad or m).
+    bounds: ClassVar[tuple[float, float]] = (1e-5, 0.5)
+    scale_name: ClassVar[str] = "displacement"
+    scale_unit: ClassVar[str] = "rad"
+    default_scale: ClassVar[float] = PRESLIDING_DISPLACEMENT
+    symbol: ClassVar[str] = "q_c"
+
+    def names(self, model: ModelView) -> tuple[str, ...]:
+        n = model.robot.n_joints
+        self.per_joint(n)
+        return tuple(f"FP{j + 1}" for j in range(n))
+
+    def columns(self, model: ModelView, s: Signals) -> Any:
+        n = model.robot.n_joints
+        dq, start = s.increments()
+        if s.xp is jnp:  # inside a compiled search: the state of the trial's q_c
+            z = dahl_state(dq, start, self.per_joint(n, jnp))
+        else:
+            z = presliding_state(dq, start, self.per_joint(n))
+        return diagonal(s.taken(z), n, s.xp)

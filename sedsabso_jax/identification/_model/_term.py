@@ -1,0 +1,225 @@
+"""What a torque-model term is: the interface (:class:`AbstractTerm`), what its columns
+read (:class:`Signals`) and the parameters it has that a fit searches
+(:class:`Nonlinear`).
+
+A term is an immutable value. It owns everything about itself:
+
+- its columns (:meth:`~AbstractTerm.columns`, named by :meth:`~AbstractTerm.names`),
+  written once against the array namespace of the :class:`Signals` (NumPy, or
+  ``jax.numpy`` inside the fit's compiled search), or a new shape of the Coulomb
+  columns (:meth:`~AbstractTerm.coulomb`);
+- the constraint a physical body puts on its coefficients (:attr:`~AbstractTerm.nonnegative`,
+  :attr:`~AbstractTerm.body`), for the physically consistent fit;
+- the parameters that enter its columns nonlinearly (:meth:`~AbstractTerm.nonlinear`),
+  their bounds and how the term reads a trial of them (:meth:`~AbstractTerm.with_nonlinear`);
+- a state along the samples, if it has one: the :class:`Signals` give each recording's
+  increments from its start (:meth:`Signals.increments`) and take a subset's rows from
+  the whole recording's (:meth:`Signals.taken`);
+- what it reads of the model's own fitted values, if anything (:attr:`~AbstractTerm.waiting`,
+  :meth:`~AbstractTerm.reading`): the fit gives it a first fit's values, and again each
+  later fit's while it :attr:`~AbstractTerm.iterates`;
+- its word in the command line's ``--friction`` text (:attr:`~AbstractTerm.name`,
+  :meth:`~AbstractTerm.parse`, :attr:`~AbstractTerm.text`) and its settings in reports.
+
+Nothing outside a term asks which kind it is: the model, the fit and the validation read
+these answers.
+"""
+
+# no `from __future__ import annotations`: equinox reads the AbstractVar annotations
+import abc
+import dataclasses
+from types import ModuleType
+from typing import Any, Protocol
+
+import equinox as eqx
+import numpy as np
+
+from ...dynamics._base_parameters import BaseParameters
+from ...dynamics._robot import Robot
+from ._dahl import increments
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Nonlinear:
+    """A term's parameters that enter its columns nonlinearly and that a fit searches
+    (each ``(k,)``: ``values`` to start from, ``lower`` and ``upper`` bounds, all > 0,
+    searched in log scale), their ``names`` in reports and their ``unit``."""
+
+    names: tuple[str, ...]
+    values: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    unit: str
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Signals:
+    """What a term's columns read, each ``(..., n)``: positions, velocities,
+    accelerations; ``recording`` each sample's recording (``(...)``) or None (one
+    recording, or a new motion); ``coulomb`` the model's Coulomb shape ``c(qd)``;
+    ``xp`` the array namespace to compute with (``numpy``, or ``jax.numpy`` in a
+    compiled search).
+
+    ``rigid``: the rows of the model's rigid-body columns (the base columns but each
+    joint's viscous and Coulomb friction, then the columns of terms that are bodies),
+    ``(..., n, r)``, where a term reads the model's own torque; ``probe``: a torque to
+    read instead (the model's random states, where it finds which columns the base
+    spans).
+
+    ``whole``, ``keep``: signals of a subset of the samples know the samples they were
+    taken from and where (a term whose columns carry a state along the samples
+    integrates it on the whole and takes the subset, :meth:`taken`); ``steps``: the
+    whole's :meth:`increments`, computed before (a compiled search's)."""
+
+    q: Any
+    qd: Any
+    qdd: Any
+    recording: np.ndarray | None
+    coulomb: Any
+    xp: ModuleType = np
+    rigid: np.ndarray | None = None
+    probe: np.ndarray | None = None
+    whole: "Signals | None" = None
+    keep: np.ndarray | None = None
+    steps: tuple | None = None
+
+    @property
+    def batch(self) -> tuple[int, ...]:
+        return tuple(self.qd.shape[:-1])
+
+    def rigid_torque(self, values: np.ndarray) -> np.ndarray:
+        """The model's rigid-body torque ``(..., n)`` with the rigid-body columns'
+        ``values`` (:meth:`~._torque_model.TorqueModel.rigid_values`; the probe's torque
+        where there is one)."""
+        if self.probe is not None:
+            return self.probe
+        if self.rigid is None:
+            raise ValueError("these signals carry no rigid-body rows")
+        return self.rigid @ np.asarray(values)
+
+    def increments(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each sample's position increment from the previous one in its recording
+        (``(T, n)``, 0 at a recording's start) and where each recording starts
+        (``(T,)``), over the whole recordings (time order)."""
+        if self.steps is not None:
+            return self.steps
+        source = self if self.whole is None else self.whole
+        return increments(np.asarray(source.q), source.recording)
+
+    def taken(self, values: Any) -> Any:
+        """``values`` of the whole recordings (``(T, ...)``) at these signals' samples."""
+        return values if self.keep is None else values[self.keep]
+
+
+class ModelView(Protocol):
+    """What a term reads of its torque model (:class:`~._torque_model.TorqueModel`)."""
+
+    @property
+    def robot(self) -> Robot: ...
+
+    @property
+    def base(self) -> BaseParameters: ...
+
+    @property
+    def recordings(self) -> int: ...
+
+    @property
+    def motor_matrix(self) -> np.ndarray: ...
+
+    @property
+    def coupled_motors(self) -> tuple[int, ...]: ...
+
+    def rigid_values(self, values: np.ndarray) -> np.ndarray: ...
+
+
+class AbstractTerm(eqx.Module):
+    """A term of the torque model beyond the rigid-body base regressor (module
+    docstring). A final class sets ``name`` (its word in ``--friction``) and
+    ``nonnegative`` (whether a physical body has its coefficients ``>= 0``), and
+    implements :meth:`names` and :meth:`columns`; the rest has defaults: no Coulomb
+    shape, no searched parameters, no state, reads nothing of the fit."""
+
+    name: eqx.AbstractClassVar[str]
+    nonnegative: eqx.AbstractClassVar[bool]
+
+    @abc.abstractmethod
+    def names(self, model: ModelView) -> tuple[str, ...]:
+        """The names of this term's columns in ``model`` (a ValueError where the term does
+        not apply to the model)."""
+
+    @abc.abstractmethod
+    def columns(self, model: ModelView, s: Signals) -> Any:
+        """The columns ``(..., n, len(names))`` at the samples of ``s``, computed with
+        ``s.xp``."""
+
+    def coulomb(self, qd: Any, xp: ModuleType = np) -> Any:
+        """The Coulomb columns' values in place of ``sign(qd)``, or None to keep them."""
+        return None
+
+    @property
+    def body(self) -> bool:
+        """Whether the columns are rigid bodies' inertial parameters, 10 a body in the
+        robot's order (``XX YY ZZ XY XZ YZ M MX MY MZ``): a physical body has a positive
+        semidefinite pseudo-inertia."""
+        return False
+
+    def nonlinear(self, model: ModelView) -> Nonlinear | None:
+        """The parameters a fit searches, or None (none, or fixed)."""
+        return None
+
+    def with_nonlinear(self, values: Any) -> "AbstractTerm":
+        """The term with its searched parameters at ``values`` (floats; or traced values
+        inside a compiled search, taken as they are)."""
+        raise ValueError(f"term {self.name!r} has no parameters to search")
+
+    @property
+    def waiting(self) -> bool:
+        """Whether the columns read the model's own fitted values and have none yet: the
+        fit first fits the model without the waiting terms and gives them its values."""
+        return False
+
+    @property
+    def iterates(self) -> bool:
+        """Whether the term reads every fit's values until its columns settle (a fixed
+        point), not only the first fit's."""
+        return False
+
+    def reading(self, model: ModelView, values: np.ndarray) -> "AbstractTerm":
+        """The term reading the model's fitted ``values`` (the base values first);
+        itself for a term that reads none."""
+        return self
+
+    @property
+    def text(self) -> str:
+        """The term in the command line's ``--friction`` text (``name[:option]``)."""
+        return self.name
+
+    @classmethod
+    def parse(cls, option: str | None) -> "AbstractTerm":
+        """The term of the command line's ``name:option`` text (no option: defaults)."""
+        if option is not None:
+            raise ValueError(f"friction term {cls.name!r} takes no option, got "
+                             f"{cls.name}:{option}")
+        return cls()
+
+    def settings(self) -> dict:
+        """The term's options for the report, ``{name_option: value}``."""
+        return {f"{self.name}_{f.name}": getattr(self, f.name)
+                for f in dataclasses.fields(self)}
+
+
+def diagonal(values: Any, n: int, xp: ModuleType = np) -> Any:
+    """``(..., n, n)`` columns with ``values (..., n)`` on joint ``j``'s own column ``j``
+    (exact zeros elsewhere)."""
+    values = xp.asarray(values)
+    return xp.where(np.eye(n, dtype=bool), values[..., None, :], 0.0)
+
+
+def through_motors(K: np.ndarray, motors: list[int], v: np.ndarray, sign: bool = False
+                   ) -> np.ndarray:
+    """Columns ``K[m, j] u_m`` for joint ``j``, motor ``m`` of ``motors``, with ``u_m =
+    K_m . v`` (or its sign): a motor-side coefficient seen at the joints."""
+    u = v @ K[motors].T  # (..., motors)
+    if sign:
+        u = np.sign(u)
+    return K[motors].T * u[..., None, :]

@@ -1,0 +1,410 @@
+"""The torque model an identification fits: the base regressor plus terms::
+
+    tau = Yb(q, qd, qdd) beta        base regressor: rigid body, viscous + Coulomb friction
+          + each term's columns      offset, friction beyond Coulomb's, actuators, ...
+
+A :class:`TorqueModel` is built once (:meth:`TorqueModel.of`) and travels whole through
+:func:`~sedsabso_jax.identify`, the validations and the reports. ``recordings = R > 1``
+(several recordings fitted together) gives the :class:`~._offset.Offset` one column per
+joint and recording, ``OFF1.1 .. OFF1.R, OFF2.1 ..``: a torque sensor's zero that moved
+between them. ``transmission`` is ``K`` (motor angles ``theta = K q``) for the armature
+and coupled-motor terms, or None (``K = 1``). The extra columns come after the base
+columns, term by term in :data:`~._order.TERMS`' order.
+
+An extra column that the base regressor already spans (e.g. the armature of a first joint
+about a fixed vertical axis, which regroups with ``ZZ1``) is dropped: it cannot be
+identified apart. :attr:`TorqueModel.regrouped` names them.
+
+The model reads every term's answers (:mod:`._term`) and branches on none of their
+kinds: the parameters its terms search (:meth:`TorqueModel.nonlinear`,
+:meth:`TorqueModel.with_nonlinear`) and how (:attr:`TorqueModel.search`), what they read
+of a fit (:meth:`TorqueModel.reading`), the constraints of a physical body
+(:attr:`TorqueModel.nonnegative`, :attr:`TorqueModel.bodies`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Iterable
+from typing import Any
+
+import equinox as eqx
+import jax
+import numpy as np
+from jaxtyping import ArrayLike, Float, Int
+
+from ...dynamics._base_parameters import (
+    RANK_TOLERANCE,
+    BaseParameters,
+    base_parameters,
+    random_states,
+)
+from ...dynamics._robot import Robot
+from ...measurements._transmission import Transmission, TransmissionLike, coupled_motors
+from .._search._methods import AbstractSearch, CoordinateSearch
+from ._order import canonical_order, friction_text
+from ._term import AbstractTerm, Nonlinear, Signals
+
+#: How a model's nonlinear parameters are searched unless it says otherwise.
+DEFAULT_SEARCH = CoordinateSearch()
+#: Which extra columns a model keeps, per model structure (:func:`_kept`).
+_KEPT: dict[tuple, tuple[BaseParameters, np.ndarray]] = {}
+
+
+def _matrix(transmission: object) -> object:
+    """A :class:`~sedsabso_jax.Transmission` as its matrix ``K``, a matrix as floats."""
+    if isinstance(transmission, Transmission):
+        return transmission.matrix
+    try:
+        return None if transmission is None else np.asarray(transmission, dtype=float)
+    except (TypeError, ValueError):
+        return transmission  # for the check to name
+
+
+class TorqueModel(eqx.Module):
+    """A torque model: the base regressor of a robot plus extra ``terms`` (module
+    docstring); ``transmission`` is ``K`` (``n x n``) or None; ``recordings`` the
+    recordings with one torque offset each (1: one offset for all); ``search`` how a fit
+    searches the terms' nonlinear parameters (None: :data:`DEFAULT_SEARCH`).
+
+    ``regressor(q, qd, qdd)`` is ``(..., n, d)`` with ``d`` = :attr:`dim`;
+    ``predict(values, q, qd, qdd)`` is ``regressor @ values``. :meth:`of` builds one from
+    a robot.
+    """
+
+    base: BaseParameters
+    terms: tuple[AbstractTerm, ...] = eqx.field(default=(), converter=canonical_order)
+    transmission: np.ndarray | None = eqx.field(default=None, converter=_matrix)
+    recordings: int = 1
+    search: AbstractSearch | None = None
+
+    def __check_init__(self):
+        if not isinstance(self.terms, tuple) or not all(isinstance(t, AbstractTerm)
+                                                        for t in self.terms):
+            raise TypeError(f"terms must be terms (Offset(), Quadratic(), ...; "
+                            f"parse_friction('viscous-coulomb+offset') reads the command "
+                            f"line's text), got {self.terms!r}")
+        kinds = [type(t) for t in self.terms]
+        if len(set(kinds)) < len(kinds):
+            raise ValueError(f"one term of each kind, got {self.friction!r}")
+        if not isinstance(self.recordings, (int, np.integer)) or isinstance(
+                self.recordings, bool) or self.recordings < 1:
+            raise ValueError(f"recordings must be an integer >= 1, got {self.recordings!r}")
+        if self.recordings > 1 and not any(t.name == "offset" for t in self.terms):
+            raise ValueError("one torque offset per recording needs the Offset() term in the "
+                             "torque model")
+        if self.transmission is not None:
+            n = self.robot.n_joints
+            K = self.transmission
+            if not isinstance(K, np.ndarray) or K.shape != (n, n) or not np.all(np.isfinite(K)):
+                raise ValueError(f"transmission must be a finite ({n}, {n}) matrix for robot "
+                                 f"{self.robot.name!r}, got {K!r}")
+        if self.search is not None and not isinstance(self.search, AbstractSearch):
+            raise TypeError(f"search must be a search method (CoordinateSearch(), "
+                            f"PopulationSearch(solver), LeastSquaresSearch()), got "
+                            f"{self.search!r}")
+        self._extra_names()  # each term checks that it applies
+
+    @classmethod
+    def of(cls, robot: Robot, terms: AbstractTerm | Iterable[AbstractTerm] = (), *,
+           transmission: TransmissionLike = None, base: BaseParameters | None = None,
+           recordings: int = 1, search: AbstractSearch | None = None) -> TorqueModel:
+        """The model of ``robot`` with ``terms`` (one term or several, in any order; none:
+        the base regressor's viscous and Coulomb friction only), ``transmission`` (a
+        :class:`~sedsabso_jax.Transmission` or its matrix ``K``) for the armature and
+        coupled-motor terms, ``base`` a precomputed ``base_parameters(robot)`` (computed
+        when None), ``recordings``: one torque offset per joint and recording, and
+        ``search``: how a fit searches the terms' nonlinear parameters."""
+        if not isinstance(robot, Robot):
+            raise TypeError(f"robot must be a sedsabso_jax.Robot, got {type(robot).__name__}")
+        if isinstance(terms, str):
+            raise TypeError(f"terms must be terms (Offset(), ...), not the text {terms!r}: "
+                            f"parse_friction({terms!r}) reads it")
+        if base is None:
+            base = base_parameters(robot)
+        elif not isinstance(base, BaseParameters) or base.robot.n_params != robot.n_params:
+            raise ValueError("base must be base_parameters(robot) of this robot")
+        found = (terms,) if isinstance(terms, AbstractTerm) else terms
+        try:
+            found = tuple(found)
+        except TypeError:
+            raise TypeError(f"terms must be a term or several (Offset(), [Offset(), "
+                            f"SmoothCoulomb()]), got {terms!r}") from None
+        return cls(base, found, transmission, recordings, search)  # type: ignore[arg-type]
+
+    @property
+    def robot(self) -> Robot:
+        return self.base.robot
+
+    @property
+    def friction(self) -> str:
+        """The terms as the command line writes them: ``viscous-coulomb+offset+...``."""
+        return friction_text(self.terms)
+
+    @property
+    def searched_by(self) -> AbstractSearch:
+        """The search method of :attr:`search`, or the default."""
+        return DEFAULT_SEARCH if self.search is None else self.search
+
+    def settings(self) -> dict:
+        """What the reports write about the model besides its friction terms."""
+        out: dict = {}
+        if self.transmission is not None:
+            out["transmission"] = self.transmission
+        if self.regrouped:
+            out["regrouped"] = list(self.regrouped)
+        for term in self.terms:
+            out.update(term.settings())
+        if self.recordings > 1:
+            out["offset_per_recording"] = self.recordings
+        return out
+
+    @property
+    def motor_matrix(self) -> np.ndarray:
+        """The transmission's ``K``, the identity without one."""
+        n = self.robot.n_joints
+        return np.eye(n) if self.transmission is None else self.transmission
+
+    @property
+    def coupled_motors(self) -> tuple[int, ...]:
+        """The motors (0-based) that turn with several joints."""
+        return coupled_motors(self.motor_matrix)
+
+    def check_recordings(self, count: int) -> None:
+        """That a model with one torque offset per recording has ``count`` of them."""
+        if self.recordings > 1 and self.recordings != count:
+            raise ValueError(f"the torque model has one offset per recording for "
+                             f"{self.recordings} recordings; the data hold {count}")
+
+    def _extra_names(self) -> list[str]:
+        return [name for term in self.terms for name in term.names(self)]
+
+    @property
+    def _kept(self) -> np.ndarray:
+        """Indices of the extra columns that the base regressor does not span (found as
+        the base parameters are, at random states; once per structure of model)."""
+        key = (id(self.base), self.recordings,
+               None if self.transmission is None else self.transmission.tobytes(),
+               tuple((type(t), repr(sorted(t.settings().items()))) for t in self.terms))
+        if key not in _KEPT:
+            _KEPT[key] = (self.base, self._independent())
+        return _KEPT[key][1]
+
+    def _independent(self) -> np.ndarray:
+        if not self._extra_names():
+            return np.zeros(0, dtype=int)
+        robot = self.robot
+        # the sample count base_parameters uses: the regressor is compiled for it already
+        q, qd, qdd = random_states(robot, max(50, -(-4 * robot.n_params // robot.n_joints)),
+                                   seed=1)
+        recording = np.random.default_rng(1).integers(0, self.recordings, q.shape[0])
+        # a random torque for terms that read the model's own: which of their columns the
+        # base spans must not depend on the values they read
+        probe = np.random.default_rng(2).standard_normal(q.shape)
+        Y = self._full_regressor(q, qd, qdd, recording if self.recordings > 1 else None,
+                                 probe=probe)
+        W = Y.reshape(-1, Y.shape[-1])
+        W = W / np.where(np.linalg.norm(W, axis=0) > 0, np.linalg.norm(W, axis=0), 1.0)
+        d = np.abs(np.diag(np.linalg.qr(W, mode="r")))
+        independent = d > RANK_TOLERANCE * d.max()
+        return np.flatnonzero(independent[self.base.rank:])
+
+    @property
+    def regrouped(self) -> tuple[str, ...]:
+        """Extra columns dropped because the base regressor spans them."""
+        names = self._extra_names()
+        kept = set(self._kept.tolist())
+        return tuple(n for i, n in enumerate(names) if i not in kept)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        extra = self._extra_names()
+        return tuple(self.base.names) + tuple(extra[i] for i in self._kept)
+
+    def _per_column(self, answer) -> np.ndarray:
+        extra = [answer(term) for term in self.terms for _ in term.names(self)]
+        return np.array([False] * self.base.rank + [extra[i] for i in self._kept], dtype=bool)
+
+    @property
+    def nonnegative(self) -> np.ndarray:
+        """Per column (:attr:`names`): whether a physical value is >= 0 (the terms that
+        say so; the base columns are constrained through the full parameters)."""
+        return self._per_column(lambda term: term.nonnegative)
+
+    @property
+    def bodies(self) -> np.ndarray:
+        """Per column (:attr:`names`): whether it is a rigid body's inertial parameter
+        (10 a body, :attr:`~._term.AbstractTerm.body`), constrained as the links are."""
+        return self._per_column(lambda term: term.body)
+
+    @property
+    def dim(self) -> int:
+        return len(self.names)
+
+    @property
+    def rigid_columns(self) -> np.ndarray:
+        """The base columns of the rigid body: all but each joint's viscous and Coulomb
+        friction (which never regroup)."""
+        friction = {c for p in ("FV", "FC") for c in self.base.joint_columns(p)
+                    if c is not None}
+        return np.array([c for c in range(self.base.rank) if c not in friction], dtype=int)
+
+    def coulomb(self, qd: Any, xp: Any = np) -> tuple[Any, bool]:
+        """The model's Coulomb shape at ``qd`` (a term's, else ``sign(qd)``) and whether a
+        term reshaped it."""
+        for term in reversed(self.terms):
+            shape = term.coulomb(qd, xp)
+            if shape is not None:
+                return shape, True
+        return xp.sign(qd), False
+
+    def rigid_values(self, values: np.ndarray) -> np.ndarray:
+        """The values (of :attr:`names`) of the rigid-body columns: the base columns but
+        friction (:attr:`rigid_columns`), then every column of the terms that are bodies
+        (0 for one that regroups), in :meth:`signals`' ``rigid`` order."""
+        values = np.asarray(values, dtype=float)
+        out = [values[self.rigid_columns]]
+        position = {int(e): self.base.rank + i for i, e in enumerate(self._kept)}
+        start = 0
+        for term in self.terms:
+            size = len(term.names(self))
+            if term.body:
+                out.append(np.array([values[position[e]] if e in position else 0.0
+                                     for e in range(start, start + size)]))
+            start += size
+        return np.concatenate(out)
+
+    def signals(self, q, qd, qdd, recording=None, base_rows=None, *, xp: Any = np,
+                probe=None, whole=None, keep=None, steps=None) -> Signals:
+        """What the terms' columns read at these samples (:class:`~._term.Signals`):
+        the model's Coulomb shape computed with ``xp``; ``base_rows`` the base regressor
+        (the rigid-body rows are its columns but friction, then the columns of the terms
+        that are bodies); ``whole`` and ``keep``: these samples are ``keep`` of the whole
+        recordings ``(q, recording)``; ``steps``: the whole's increments."""
+        coulomb, _ = self.coulomb(qd, xp)
+        whole_signals = None if whole is None else Signals(
+            whole[0], whole[0], whole[0], whole[1], None)
+        s = Signals(q, qd, qdd, recording, coulomb, xp, None, probe, whole_signals, keep, steps)
+        if base_rows is None:
+            return s
+        bodies = [term.columns(self, s) for term in self.terms if term.body]
+        rigid = xp.concatenate([base_rows[..., self.rigid_columns], *bodies], -1) \
+            if bodies else base_rows[..., self.rigid_columns]
+        return dataclasses.replace(s, rigid=rigid)
+
+    def _full_regressor(self, q, qd, qdd, recording=None, base_rows=None, probe=None,
+                        whole=None, keep=None) -> np.ndarray:
+        q, qd, qdd = (np.asarray(a, dtype=float) for a in (q, qd, qdd))
+        Y = np.asarray(self.base.regressor(q, qd, qdd) if base_rows is None else base_rows)
+        n = self.robot.n_joints
+        batch = Y.shape[:-2]
+        q, qd, qdd = (np.broadcast_to(a, batch + (n,)) for a in (q, qd, qdd))
+        s = self.signals(q, qd, qdd, recording, Y, probe=probe, whole=whole, keep=keep)
+        if self.coulomb(qd)[1]:  # a term reshapes the Coulomb columns
+            Y = Y.copy()
+            Y[..., np.arange(n), np.array(self.base.joint_columns("FC"))] = s.coulomb
+        extra = [term.columns(self, s) for term in self.terms]
+        return np.concatenate([Y, *extra], -1)
+
+    def regressor(self, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
+                  qdd: Float[ArrayLike, "*batch n"],
+                  recording: Int[ArrayLike, "*batch"] | None = None, *,
+                  base_rows: Float[ArrayLike, "*batch n b"] | None = None,
+                  every_column: bool = False, whole: tuple | None = None,
+                  keep: np.ndarray | None = None) -> Float[np.ndarray, "*batch n d"]:
+        """``(..., n, dim)``: the base columns, then the identifiable extra columns;
+        ``recording``: the recording of each sample (one offset per recording; the
+        recordings a state restarts at); None: one recording, or a new motion (the
+        offsets' mean); ``base_rows``: the base regressor at these samples when already
+        computed; ``every_column``: also the extra columns the base regressor spans;
+        ``whole``, ``keep``: these samples are ``keep`` of the whole recordings ``(q,
+        recording)`` (a state is integrated along the whole)."""
+        Y = self._full_regressor(q, qd, qdd, recording, base_rows, whole=whole, keep=keep)
+        if every_column:
+            return Y
+        keep_columns = np.r_[np.arange(self.base.rank), self.base.rank + self._kept]
+        return Y[..., keep_columns] if len(keep_columns) < Y.shape[-1] else Y
+
+    def predict(self, values: Float[ArrayLike, " d"], q: Float[ArrayLike, "*batch n"],
+                qd: Float[ArrayLike, "*batch n"], qdd: Float[ArrayLike, "*batch n"],
+                recording: Int[ArrayLike, "*batch"] | None = None
+                ) -> Float[np.ndarray, "*batch n"]:
+        """Torques ``regressor(q, qd, qdd, recording) @ values``, ``(..., n)``; terms
+        still waiting for fitted values (:attr:`waiting`) read ``values``."""
+        values = np.asarray(values, dtype=float)
+        if values.shape != (self.dim,):
+            raise ValueError(f"values must have shape ({self.dim},), got {values.shape}")
+        model = self.reading(values, only=lambda term: term.waiting)
+        return model.regressor(q, qd, qdd, recording) @ values
+
+    # the fit's questions, answered by the terms
+    def nonlinear(self) -> list[tuple[int, Nonlinear]]:
+        """The parameters a fit searches: ``(term index, Nonlinear)`` of each term that
+        has some."""
+        out = []
+        for i, term in enumerate(self.terms):
+            found = term.nonlinear(self)
+            if found is not None:
+                out.append((i, found))
+        return out
+
+    def with_nonlinear(self, values: Any) -> TorqueModel:
+        """The model with the searched parameters at ``values`` (those of
+        :meth:`nonlinear`, concatenated; traced values inside a compiled search)."""
+        terms, k = list(self.terms), 0
+        for i, found in self.nonlinear():
+            m = len(found.values)
+            terms[i] = terms[i].with_nonlinear(values[k:k + m])
+            k += m
+        if k != np.shape(values)[0]:
+            raise ValueError(f"expected {k} nonlinear parameters, got {np.shape(values)[0]}")
+        if isinstance(values, jax.core.Tracer):  # a trial inside a compiled search
+            return eqx.tree_at(lambda m: m.terms, self, tuple(terms))
+        return dataclasses.replace(self, terms=tuple(terms))
+
+    @property
+    def waiting(self) -> bool:
+        """Whether a term waits for the model's fitted values before its columns exist."""
+        return any(term.waiting for term in self.terms)
+
+    @property
+    def iterates(self) -> bool:
+        """Whether a term reads every fit's values until they settle (a fixed point)."""
+        return any(term.iterates for term in self.terms)
+
+    def without_waiting(self) -> TorqueModel:
+        """The model without the terms that wait for fitted values (what gives them
+        their first values)."""
+        return dataclasses.replace(self, terms=tuple(t for t in self.terms if not t.waiting))
+
+    def reading(self, values: Float[ArrayLike, " d"], *,
+                only: Callable[[AbstractTerm], bool] = lambda term: True) -> TorqueModel:
+        """The model whose terms (those ``only`` selects) read the fitted ``values`` (the
+        base values first); the model itself where none reads them."""
+        terms = tuple(t.reading(self, values) if only(t) else t for t in self.terms)
+        if all(a is b for a, b in zip(terms, self.terms)):
+            return self
+        return dataclasses.replace(self, terms=terms)
+
+
+def model_of(robot: Robot, model: TorqueModel | None) -> TorqueModel:
+    """``model``, checked to be a :class:`TorqueModel` of ``robot``; None: the robot's
+    rigid-body model with viscous and Coulomb friction."""
+    if not isinstance(robot, Robot):
+        raise TypeError(f"robot must be a sedsabso_jax.Robot, got {type(robot).__name__}")
+    if model is None:
+        return TorqueModel.of(robot)
+    if not isinstance(model, TorqueModel):
+        raise TypeError(f"model must be a TorqueModel (TorqueModel.of(robot, terms); "
+                        f"parse_friction reads the command line's 'a+b' text), got {model!r}")
+    if model.robot.n_params != robot.n_params or model.robot.n_joints != robot.n_joints:
+        raise ValueError(f"model is a TorqueModel of robot {model.robot.name!r} with "
+                         f"{model.robot.n_joints} joints, not of {robot.name!r}")
+    return model
+
+
+def regrouped_message(model: TorqueModel) -> str:
+    """The warning that extra columns of ``model`` were left out."""
+    return (f"identify: {', '.join(model.regrouped)} cannot be identified apart from the base "
+            f"parameters (their columns are in the base regressor's span); left out of the "
+            f"model")

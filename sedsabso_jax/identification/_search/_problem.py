@@ -1,0 +1,55 @@
+"""What a search of a few parameters reads of its problem (:class:`SearchProblem`), the
+population's losses in one compiled call (:func:`losses`), and what a search returns
+(:class:`Searched`)."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Protocol
+
+import equinox as eqx
+import jax
+import numpy as np
+from jaxtyping import Array, Float
+
+
+class SearchProblem(Protocol):
+    """A problem in ``k`` parameters ``u``, an ``equinox.Module`` (its arrays are the
+    compiled calls' arguments, so one compilation serves every problem of one shape)."""
+
+    def loss(self, u: Float[Array, " k"]) -> Float[Array, ""]:
+        """The loss at ``u`` (traceable)."""
+        ...
+
+    def residual(self, u: Float[Array, " k"]) -> Float[Array, " N"]:
+        """The residual vector whose mean square is :meth:`loss` (traceable)."""
+        ...
+
+
+def _loss(u, problem):
+    return problem.loss(u)
+
+
+_population = eqx.filter_jit(jax.vmap(_loss, (0, None)))
+
+
+def losses(problem: SearchProblem, U: Float[np.ndarray, "p k"]) -> Float[np.ndarray, " p"]:
+    """The losses of the population ``U`` (one row per member), in one vmapped call."""
+    return np.asarray(_population(np.asarray(U, dtype=float), problem))
+
+
+def fitness(u, problem):
+    """The problem's loss as a fitness ``f(u, args)`` whose ``args`` is the problem, for
+    :func:`~sedsabso_jax.minimise`."""
+    return problem.loss(u)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Searched:
+    """What a search returns: the best ``u`` found, its ``loss``, the ``evaluations``
+    made (a Jacobian counted as ``k + 1``) and the seconds it took."""
+
+    u: np.ndarray
+    loss: float
+    evaluations: int
+    seconds: float

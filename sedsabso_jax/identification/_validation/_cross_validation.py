@@ -1,0 +1,134 @@
+"""The validation of one estimator and torque model over a validation's splits
+(:func:`cross_validation_of`): each split's training samples fitted as any fit is
+(:func:`~.._fit._fit.fit`: on their normal equations where the estimator reads only
+them, the model's stages as its terms ask), its test samples predicted; and whether one
+validation is worse than another (:func:`not_worse`). :mod:`._splits` makes the
+splits, :mod:`._selection` has the public functions built on this."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from .._estimators._estimator import Estimator, describe
+from .._fit._fit import fit as fit_model
+from .._fit._samples import Samples
+from .._metrics import Metrics, validation_metrics
+from .._model._torque_model import TorqueModel
+from ._splits import Splits
+
+#: Excess errors below this fraction of the best validated error are ties: a model
+#: is not made more complex for less.
+TIE_FRACTION = 0.01
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class CrossValidation:
+    """Predictions of one identification setting on samples it was not fitted to, split
+    by a :class:`~._splits.Validation`, and their errors.
+
+    Attributes:
+        metrics: :class:`~.._metrics.Metrics` of all predicted samples together (each
+            split's, stacked: for folds, the out-of-fold predictions).
+        fold_scores: the error of each split (NRMS over the limits %, else relative RMS %).
+        score: their mean, the validated error; ``standard_error`` its standard error
+            over the splits.
+        period_s: the repeat period phase folds follow (None: contiguous folds, or
+            another validation).
+        folds: the fold of each sample where the splits are folds (else None);
+            ``n_parameters``: the model's parameters.
+        settings: the estimator's and the model's settings (JSON-ready but for arrays).
+        estimator, model: what was validated.
+        validation: the validation's settings (``kind`` and its options);
+            ``split_names`` one per split.
+    """
+
+    metrics: Metrics
+    fold_scores: np.ndarray
+    period_s: float | None
+    folds: np.ndarray | None
+    n_parameters: int
+    settings: dict
+    estimator: Estimator | None = None
+    model: TorqueModel | None = None
+    validation: dict = dataclasses.field(default_factory=lambda: {"kind": "phase folds"})
+    split_names: tuple[str, ...] = ()
+    split_parts: tuple[str, ...] = ()
+
+    @property
+    def part_scores(self) -> dict[str, float]:
+        """The mean error of each kind of split (``{"phase folds": ..., "speed splits":
+        ...}`` for pooled validations; one entry otherwise)."""
+        parts = self.split_parts or (self.validation["kind"],) * len(self.fold_scores)
+        return {k: float(np.mean([v for p, v in zip(parts, self.fold_scores) if p == k]))
+                for k in dict.fromkeys(parts)}
+
+    @property
+    def score(self) -> float:
+        return float(np.mean(self.fold_scores))
+
+    @property
+    def standard_error(self) -> float:
+        k = len(self.fold_scores)
+        return float(np.std(self.fold_scores, ddof=1) / np.sqrt(k)) if k > 1 else 0.0
+
+    @property
+    def measure(self) -> str:
+        return ("nrms_limits_percent" if self.metrics.nrms_limits_percent is not None
+                else "relative_rms_percent")
+
+    def as_dict(self) -> dict:
+        return {"measure": self.measure, "score": self.score,
+                "standard_error": self.standard_error, "fold_scores": self.fold_scores,
+                "folds": len(self.fold_scores), "period_s": self.period_s,
+                "validation": self.validation, "splits": list(self.split_names),
+                "part_scores": self.part_scores,
+                "n_parameters": self.n_parameters, "settings": self.settings,
+                "metrics": self.metrics.as_dict()}
+
+
+def score_of(metrics: Metrics) -> float:
+    """The validation's measure: NRMS over the limits %, else relative RMS %."""
+    if metrics.nrms_limits_percent is not None:
+        return metrics.nrms_limits_percent
+    return metrics.relative_rms_percent_overall
+
+
+def cross_validation_of(estimator: Estimator, model: TorqueModel, samples: Samples,
+                        splits: Splits, limits: np.ndarray | None, validation: dict, *,
+                        on_fit: Callable[[], object] | None = None) -> CrossValidation:
+    """Fit ``estimator`` and ``model`` to each split's training samples of ``samples``
+    (the recordings, stacked) and predict its test samples; ``validation`` the settings
+    of the validation that made the splits; ``on_fit()`` after each fit."""
+    measured, predicted, scores = [], [], []
+    # many small factorisations: one BLAS thread each (OpenBLAS's threads made the KUKA
+    # LWR4+'s default identify 1.3x slower on 2 idle cores); the user's setting is
+    # restored on leaving
+    with threadpool_limits(limits=1, user_api="blas"):
+        if not model.waiting:
+            samples.rows(model)  # the splits' rows are taken from the whole's
+        for train, test in zip(splits.train, splits.test):
+            fitted = fit_model(estimator, model, samples.subset(train), limits, warn=False)
+            measured.append(samples.tau[test])
+            predicted.append(samples.subset(test).predict(fitted.model, fitted.fit.x))
+            scores.append(score_of(validation_metrics(measured[-1], predicted[-1], limits)))
+            if on_fit is not None:
+                on_fit()
+    settings = {**describe(estimator, model, limits), "sigma": estimator.sigma}
+    return CrossValidation(
+        metrics=validation_metrics(np.concatenate(measured), np.concatenate(predicted), limits),
+        fold_scores=np.asarray(scores), period_s=splits.period_s, folds=splits.labels,
+        n_parameters=model.dim, settings=settings, estimator=estimator, model=model,
+        validation=validation, split_names=splits.names, split_parts=splits.parts)
+
+
+def not_worse(cv: CrossValidation, best: CrossValidation) -> bool:
+    """Whether ``cv``'s mean excess over ``best``, fold by fold, is at most one standard
+    error of that excess, or below :data:`TIE_FRACTION` of the best error."""
+    excess = cv.fold_scores - best.fold_scores
+    k = len(excess)
+    se = float(np.std(excess, ddof=1) / np.sqrt(k)) if k > 1 else 0.0
+    return float(np.mean(excess)) <= max(se, TIE_FRACTION * best.score)

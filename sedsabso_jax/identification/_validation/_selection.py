@@ -1,0 +1,322 @@
+"""Judging an identification on samples it was not fitted to, and choosing a model by it.
+
+A :class:`~._splits.Validation` cuts the data into splits, each a set of samples to fit
+and a set to predict. Two kinds answer two questions:
+
+- **phase folds** (:class:`~._splits.PhaseFolds`): a recording of an excitation trajectory
+  usually repeats its motion (the KUKA LWR4+ runs hold two periods of one trajectory, the
+  Panda's one and a half), so a contiguous block held out of one period is fitted in the
+  other and contiguous-block cross-validation measures repeatability. Phase folds are
+  stretches of the trajectory's PHASE (:func:`phase_folds`: the repeat period is found
+  from the positions' autocorrelation, fold ``k`` holds every sample whose phase lies in
+  ``[k/K, (k+1)/K)``; a recording that does not repeat has phase = time). They predict the
+  error on motions like the fitted one: the model only ever interpolates.
+- **speed splits** (:class:`~._splits.SpeedSplits`, the default of
+  :func:`~._auto.select_and_identify`): each joint's fast samples predicted by a fit to its
+  slow ones, as a new, faster motion asks the model to extrapolate (friction at speeds
+  never fitted). Leave one recording out (:class:`~._splits.RecordingFolds`) where there
+  are several.
+
+:func:`cross_validate` fits and predicts every split; the predictions are compared with
+the measured torques (NRMS over the torque limits where they are known, else the relative
+RMS), one score per split, their mean the validated error. :func:`select_model` validates
+a grid of torque models and estimators and keeps the simplest that is not worse than the
+best by more than one standard error (the one-standard-error rule: Hastie, Tibshirani &
+Friedman, *The Elements of Statistical Learning*, 2009, Sec. 7.10), with the standard
+error taken of the PAIRED split-by-split differences to the best: the splits differ in
+difficulty far more than the models do, and that common part cancels in the differences
+(unpaired, the rule once kept a model without the torque offset whose error was higher on
+every fold of the KUKA LWR4+ data). Excesses below 1 % of the best error
+(:data:`TIE_FRACTION`) count as ties, so a model is not made more complex for a gain no
+one could use; simpler is fewer parameters, then physically consistent, then the earlier
+estimator. Nothing here looks at held-out files: they are for judging the choice, never
+for making it.
+
+Each takes the data as a :class:`~sedsabso_jax.Measurements`, several of them, or
+``(times, q, qd, qdd, tau)``, estimator objects (:mod:`._estimators`), built torque models
+(:class:`~._model.TorqueModel`) and a validation object (default ``PhaseFolds()``).
+"""
+
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Iterable, Sequence
+from typing import cast
+
+import numpy as np
+
+from ...dynamics._robot import Robot
+from ...measurements._container import Measurements
+from .._estimators._estimator import (
+    Estimator,
+    Limits,
+    ProgressCallback,
+    checked_estimator,
+    per_joint,
+)
+from .._estimators._least_squares import OLS, WLS, PhysicallyConsistent
+from .._fit._samples import Samples
+from .._model._candidates import candidate_models
+from .._model._torque_model import TorqueModel, model_of
+from .._options import one_or_more
+from .._recordings import Data, recordings_of, stacked
+from ._cross_validation import TIE_FRACTION as TIE_FRACTION
+from ._cross_validation import CrossValidation as CrossValidation
+from ._cross_validation import cross_validation_of, not_worse
+from ._phase import DEFAULT_FOLDS as DEFAULT_FOLDS
+from ._splits import PhaseFolds, Splits, Validation
+
+#: The candidate estimators of :func:`select_model` (their weightings), simplest first.
+ESTIMATOR_CANDIDATES = (OLS(), WLS("residual"), WLS("limits"))
+#: The candidate pulls of a physically consistent fit toward the a-priori parameters
+#: (:func:`choose_prior_strength`; multiples of the data term's mean curvature), none first.
+PRIOR_STRENGTHS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)
+
+
+class _Fits:
+    """Counts fits for ``progress(label, done, total)`` (None: counts nothing)."""
+
+    def __init__(self, progress: ProgressCallback | None, total: int):
+        self.progress, self.total, self.done = progress, total, 0
+
+    def after(self, label: str) -> Callable[[], None] | None:
+        """The ``on_fit`` of :func:`~._folds.cross_validation_of` for fits labelled so."""
+        if self.progress is None:
+            return None
+        report = self.progress
+
+        def fitted() -> None:
+            self.done += 1
+            report(label, self.done, self.total)
+
+        return fitted
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Prepared:
+    """The recordings of ``data``, checked and stacked (the samples every candidate is
+    fitted to), and a validation's splits of them."""
+
+    recordings: list[Measurements]
+    samples: Samples
+    splits: Splits
+    validation: Validation
+
+    @classmethod
+    def of(cls, robot: Robot, data: Data, validation: Validation) -> Prepared:
+        if not isinstance(validation, Validation):
+            raise TypeError(f"validation must be a Validation (PhaseFolds(), SpeedSplits(), "
+                            f"RecordingFolds(), GivenFolds(labels), Pooled(...)), got "
+                            f"{validation!r}")
+        recordings = recordings_of(robot, data)
+        return cls(recordings, Samples(*stacked(recordings)), validation.splits(recordings),
+                   validation)
+
+    def validate(self, estimator: Estimator, model: TorqueModel, limits: np.ndarray | None,
+                 on_fit: Callable[[], None] | None = None) -> CrossValidation:
+        model.check_recordings(len(self.recordings))
+        settings = {**self.validation.settings(), "description": self.validation.describe()}
+        return cross_validation_of(estimator, model, self.samples, self.splits, limits,
+                                   settings, on_fit=on_fit)
+
+
+def cross_validate(robot: Robot, data: Data, estimator: Estimator = OLS(),
+                   model: TorqueModel | None = None, *,
+                   validation: Validation = PhaseFolds(), limits: Limits = None,
+                   progress: ProgressCallback | None = None) -> CrossValidation:
+    """Validate :func:`~._identify.identify` ``(robot, data, estimator, model)``: fit each
+    split of ``validation`` (a :class:`~._splits.Validation`; default
+    :data:`DEFAULT_FOLDS` phase folds) and predict it. ``data``: one recording or several
+    (stacked); ``model`` and ``limits`` as in :func:`~._identify.identify`;
+    ``progress(label, done, total)`` is called after each split's fit (``total``: the
+    splits)."""
+    prepared = Prepared.of(robot, data, validation)
+    model = model_of(robot, model)
+    limits = per_joint("limits", limits, robot.n_joints)
+    checked_estimator(estimator).check(model, limits)
+    fits = _Fits(progress, len(prepared.splits))
+    return prepared.validate(estimator, model, limits,
+                             fits.after(f"{estimator.name}, {model.friction}"))
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Selection:
+    """What :func:`select_model` returns: every candidate's validation (in the order
+    tried) as ``(settings, validation)`` pairs, where ``settings`` is ``{"method",
+    "sigma", "friction"}``; the chosen and the lowest candidate's settings; ``options``
+    the ``(estimator, model)`` of each candidate. :attr:`estimator` and :attr:`model` are
+    the chosen ones: ``identify(robot, data, sel.estimator, sel.model)`` fits it."""
+
+    candidates: tuple[tuple[dict, CrossValidation], ...]
+    chosen: dict
+    best: dict
+    options: tuple[tuple[Estimator, TorqueModel], ...] = ()
+
+    def _index(self, settings) -> int:
+        return next(i for i, (s, _) in enumerate(self.candidates) if s is settings)
+
+    @property
+    def estimator(self) -> Estimator:
+        return self.options[self._index(self.chosen)][0]
+
+    @property
+    def model(self) -> TorqueModel:
+        return self.options[self._index(self.chosen)][1]
+
+    @property
+    def cross_validation(self) -> CrossValidation:
+        """The chosen candidate's validation (the one it was chosen by)."""
+        return self.candidates[self._index(self.chosen)][1]
+
+    @property
+    def parts(self) -> tuple[str, ...]:
+        """The kinds of split the validation pools (one for a validation of one kind)."""
+        return tuple(self.cross_validation.part_scores)
+
+    def table(self) -> list[list[str]]:
+        """Rows ``[method, sigma, physical, friction, parameters, error +- SE, (each
+        part's mean error of pooled splits,) chosen]``."""
+        rows = []
+        parts = self.parts if len(self.parts) > 1 else ()
+        for settings, cv in self.candidates:
+            mark = "chosen" if settings is self.chosen else (
+                "lowest" if settings is self.best else "")
+            rows.append([settings["method"], str(settings.get("sigma") or "equal"),
+                         "yes" if settings.get("physical") else "no", settings["friction"],
+                         str(cv.n_parameters), f"{cv.score:.4f} +- {cv.standard_error:.4f}",
+                         *(f"{cv.part_scores[k]:.4f}" for k in parts), mark])
+        return rows
+
+    def as_dict(self) -> dict:
+        return {"rule": "simplest candidate (fewest parameters, then physically consistent, "
+                        "then the earlier estimator) whose split-by-split excess over the "
+                        "lowest validated error is at most one standard error (or 1 % of "
+                        "the lowest)",
+                "chosen": self.chosen, "lowest": self.best,
+                "candidates": [{"settings": s, **cv.as_dict()} for s, cv in self.candidates]}
+
+
+def simplest_not_worse(scores: Sequence[CrossValidation], physical: Sequence[bool]) -> int:
+    """The index of the candidate the one-standard-error rule picks among ``scores``
+    (each candidate's validation, ``physical`` whether its fit is physically
+    consistent): the simplest, fewest parameters, then physically consistent, then the
+    earlier, of those not worse than the lowest-scoring one (:func:`~._folds.not_worse`)."""
+    best = min(scores, key=lambda cv: cv.score)
+    order = sorted(range(len(scores)), key=lambda i: (scores[i].n_parameters,
+                                                      not physical[i], i))
+    return next(i for i in order if not_worse(scores[i], best))
+
+
+def select_model(robot: Robot, data: Data, *,
+                 models: TorqueModel | Iterable[TorqueModel] | None = None,
+                 estimators: Estimator | Iterable[Estimator] | None = None,
+                 validation: Validation = PhaseFolds(), limits: Limits = None,
+                 progress: ProgressCallback | None = None) -> Selection:
+    """Choose the torque model and the estimator by validation (module docstring).
+
+    ``models`` (default :func:`~._model.candidate_models` of the robot: its
+    :data:`~._model.FRICTION_CANDIDATES`) and ``estimators`` (default
+    :data:`ESTIMATOR_CANDIDATES`; those weighting by the torque limits are skipped
+    without ``limits``; physically consistent ones count as simpler than the same
+    unconstrained) are the grid, simplest first. Every candidate is scored by
+    ``validation`` (default phase folds, as in :func:`cross_validate`; a
+    :class:`~._splits.Pooled` validation's parts are scored from the same fits:
+    :attr:`~._folds.CrossValidation.part_scores`). ``progress(label, done, total)`` is
+    called after each fit (``total``: candidates x splits)."""
+    estimators = ESTIMATOR_CANDIDATES if estimators is None else one_or_more(estimators,
+                                                                             Estimator)
+    limits = per_joint("limits", limits, robot.n_joints)
+    if limits is None:
+        estimators = tuple(e for e in estimators if not checked_estimator(e).needs_limits)
+    prepared = Prepared.of(robot, data, validation)
+    models = candidate_models(robot) if models is None else tuple(
+        model_of(robot, m) for m in one_or_more(models, TorqueModel))
+    if not models or not estimators:
+        raise ValueError("select_model needs at least one torque model and one estimator")
+    fits = _Fits(progress, len(models) * len(estimators) * len(prepared.splits))
+    tried, options = [], []
+    for model in models:
+        for estimator in estimators:
+            checked_estimator(estimator).check(model, limits)
+            settings = {"method": estimator.name, "sigma": estimator.sigma,
+                        "physical": estimator.physical, "friction": model.friction}
+            on_fit = fits.after(f"{estimator.name}{' physical' * estimator.physical}, "
+                                f"{model.friction}")
+            tried.append((settings, prepared.validate(estimator, model, limits, on_fit)))
+            options.append((estimator, model))
+    best_settings = min(tried, key=lambda c: c[1].score)[0]
+    chosen = tried[simplest_not_worse([cv for _, cv in tried],
+                                      [e.physical for e, _ in options])][0]
+    return Selection(candidates=tuple(tried), chosen=chosen, best=best_settings,
+                     options=tuple(options))
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class PriorSelection:
+    """What :func:`choose_prior_strength` returns: each strength's validation (in
+    the order tried), the chosen and the lowest strength, and the estimator of each
+    (``estimators``); :attr:`estimator` is the chosen one."""
+
+    candidates: tuple[tuple[float, CrossValidation], ...]
+    chosen: float
+    best: float
+    estimators: tuple[Estimator, ...] = ()
+
+    @property
+    def estimator(self) -> Estimator:
+        return self.estimators[[s for s, _ in self.candidates].index(self.chosen)]
+
+    @property
+    def cross_validation(self) -> CrossValidation:
+        """The chosen strength's validation."""
+        return dict(self.candidates)[self.chosen]
+
+    def table(self) -> list[list[str]]:
+        """Rows ``[strength, CV error +- SE, chosen]``."""
+        return [[f"{s:g}", f"{cv.score:.4f} +- {cv.standard_error:.4f}",
+                 "chosen" if s == self.chosen else ("lowest" if s == self.best else "")]
+                for s, cv in self.candidates]
+
+    def as_dict(self) -> dict:
+        return {"rule": "strongest pull to the prior whose fold-by-fold excess over the "
+                        "lowest validated error is at most one standard error (or 1 % "
+                        "of the lowest)",
+                "chosen": self.chosen, "lowest": self.best,
+                "candidates": [{"prior_strength": s, **cv.as_dict()}
+                               for s, cv in self.candidates]}
+
+
+def choose_prior_strength(robot: Robot, data: Data,
+                          estimator: Estimator = PhysicallyConsistent(),
+                          model: TorqueModel | None = None, *,
+                          strengths: Iterable[float] = PRIOR_STRENGTHS,
+                          validation: Validation = PhaseFolds(), limits: Limits = None,
+                          progress: ProgressCallback | None = None) -> PriorSelection:
+    """Choose how strongly a physically consistent fit is pulled toward the a-priori
+    parameters (``prior_strength`` of :class:`~._estimators.PhysicallyConsistent`; an
+    ``OLS`` or ``WLS`` ``estimator`` is made physically consistent) by ``validation``
+    (as in :func:`cross_validate`): every strength in ``strengths`` is validated, and the
+    STRONGEST pull whose split-by-split excess over the lowest error is within one
+    standard error is kept (the one-standard-error rule: the most regularised model the
+    data cannot tell from the best). The predicted samples are fitted by nothing, chosen
+    by nothing else. ``progress(label, done, total)`` is called after each fit
+    (``total``: strengths x splits)."""
+    strengths = tuple(float(v) for v in strengths)
+    if not strengths or any(not (np.isfinite(v) and v >= 0) for v in strengths):
+        raise ValueError(f"strengths must be numbers >= 0, at least one, got {strengths}")
+    estimator = cast(PhysicallyConsistent, checked_estimator(estimator).physically_consistent())
+    prepared = Prepared.of(robot, data, validation)
+    model = model_of(robot, model)
+    limits = per_joint("limits", limits, robot.n_joints)
+    estimator.check(model, limits)
+    tried, estimators = [], []
+    fits = _Fits(progress, len(strengths) * len(prepared.splits))
+    for v in strengths:
+        estimators.append(dataclasses.replace(estimator, prior_strength=v))
+        tried.append((v, prepared.validate(estimators[-1], model, limits,
+                                           fits.after(f"prior strength {v:g}"))))
+    best_v, best = min(tried, key=lambda c: c[1].score)
+    chosen = max(v for v, cv in tried if not_worse(cv, best))
+    return PriorSelection(candidates=tuple(tried), chosen=chosen, best=best_v,
+                          estimators=tuple(estimators))
