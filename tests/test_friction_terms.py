@@ -13,7 +13,7 @@ import pytest
 import sedsabso_jax as sj
 from sedsabso_jax.dynamics import N_LINK_PARAMETERS
 from sedsabso_jax.identification import parse_friction
-from sedsabso_jax.identification._shapes import _std
+from sedsabso_jax.identification._fit._uncertainty import std_of_columns as _std
 
 
 def motion(n, T=4000, rate=100.0, seed=0):
@@ -69,21 +69,25 @@ def test_stribeck_and_load_columns_are_their_closed_forms(rs010n):
             :, None] * row, rtol=1e-9, atol=1e-9)
         np.testing.assert_allclose(col[f"FLV{j + 1}"], (np.abs(load[:, j]) * qd[:, j])[
             :, None] * row, rtol=1e-9, atol=1e-9)
-    assert model.nonnegative[-9:].all() and model.needs_load and not model.shapes()
+    assert model.nonnegative[-9:].all() and model.waiting and not model.nonlinear()
+
+
+def load_point(model):
+    return next(t for t in model.terms if t.name == "load").load_point
 
 
 def test_prediction_reads_the_load_of_its_load_point(rs010n):
-    """``predict(values)`` of a model without a load point is the model linearised at
+    """``predict(values)`` of a model without a load point is the model reading
     ``values`` times ``values``; with one (a fitted model), the load there."""
     robot, base = rs010n
     q, qd, qdd, _ = motion(3, T=30, seed=1)
     model = sj.TorqueModel.of(robot, (sj.LoadFriction(),), base=base)
     values = np.r_[np.asarray(base.values) * 1.3, [0.05, 0.1, 0.02]]
-    expected = model.linearized_at(values).regressor(q, qd, qdd) @ values
+    expected = model.reading(values).regressor(q, qd, qdd) @ values
     np.testing.assert_allclose(model.predict(values, q, qd, qdd), expected, rtol=1e-12)
     assert not np.allclose(model.regressor(q, qd, qdd) @ values, expected)  # prior's load
-    assert model.linearized_at(values).load_point == tuple(values[:base.rank])
-    fitted = model.linearized_at(np.asarray(base.values) * 0.7)
+    assert load_point(model.reading(values)) == tuple(values[model.rigid_columns])
+    fitted = model.reading(np.r_[np.asarray(base.values) * 0.7, np.zeros(3)])
     np.testing.assert_allclose(fitted.predict(values, q, qd, qdd),
                                fitted.regressor(q, qd, qdd) @ values, rtol=1e-12)
     assert not np.allclose(fitted.predict(values, q, qd, qdd), expected)
@@ -117,12 +121,13 @@ def test_load_coefficients_are_recovered(rs010n):
             load = fit.settings["load"]
             if term.fixed_point:  # the fit's load: the torque of its own values
                 assert load["settled"] and load["iterations"] < 15
-                assert fit.model.load_point == pytest.approx(
-                    tuple(fit.values[:base.rank]), rel=1e-4, abs=1e-6)
+                assert load_point(fit.model) == pytest.approx(
+                    tuple(fit.model.rigid_values(fit.values)), rel=1e-4, abs=1e-6)
             else:  # the fit's load: that of a least-squares fit without the term
                 assert load == {"iterations": 1}
                 plain = sj.identify(robot, data, sj.OLS(), sj.TorqueModel.of(robot, base=base))
-                assert fit.model.load_point == pytest.approx(tuple(plain.values[:base.rank]))
+                assert load_point(fit.model) == pytest.approx(
+                    tuple(plain.values[fit.model.rigid_columns]))
 
 
 def test_stribeck_velocities_are_searched_and_recovered(rs010n):
@@ -135,7 +140,7 @@ def test_stribeck_velocities_are_searched_and_recovered(rs010n):
                      seed=2)
     model = sj.TorqueModel.of(robot, (sj.Stribeck(fitted=True),), base=base)
     fit = sj.identify(robot, data, sj.OLS(), model)
-    shapes = fit.settings["shapes"]
+    shapes = fit.settings["searched"]["parameters"]
     found = np.array([shapes[f"v_stribeck{j + 1}"]["value"] for j in range(3)])
     std = np.array([shapes[f"v_stribeck{j + 1}"]["std"] for j in range(3)])
     np.testing.assert_allclose(found, vs, rtol=0.1)
@@ -153,7 +158,7 @@ def test_a_scale_the_data_cannot_see_is_reported(rs010n):
     robot, base = rs010n
     data = simulated(robot, lambda load, qd: 0.0 * qd, seed=3)
     model = sj.TorqueModel.of(robot, (sj.Stribeck(fitted=True),), base=base)
-    shapes = sj.identify(robot, data, sj.OLS(), model).settings["shapes"]
+    shapes = sj.identify(robot, data, sj.OLS(), model).settings["searched"]["parameters"]
     assert all(s["std"] is None or s["at_bound"] or s["std"] > 0.3 * s["value"]
                for s in shapes.values()), shapes
 
@@ -210,7 +215,8 @@ def test_the_command_fits_and_reports_them(tmp_path, rs010n):
     doc = json.loads(out.read_text())
     settings = doc["settings"]
     assert settings["friction"] == "viscous-coulomb+offset+stribeck:fit+load"
-    assert set(settings["shapes"]) == {"v_stribeck1", "v_stribeck2", "v_stribeck3"}
+    assert set(settings["searched"]["parameters"]) == {"v_stribeck1", "v_stribeck2",
+                                                       "v_stribeck3"}
     assert settings["load"] == {"iterations": 1}
     assert parse_friction(settings["friction"])[1] == sj.Stribeck(fitted=True)
 
@@ -231,6 +237,6 @@ def test_load_columns_do_not_depend_on_the_load_point(rs010n):
     model's columns."""
     robot, base = rs010n
     model = sj.TorqueModel.of(robot, (sj.Offset(), sj.LoadFriction()), base=base)
-    unloaded = model.linearized_at(np.zeros(model.dim))
+    unloaded = model.reading(np.zeros(model.dim))
     assert unloaded.names == model.names and not model.regrouped
     assert unloaded.regressor(*motion(robot.n_joints)[:3]).shape[-1] == model.dim

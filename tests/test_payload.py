@@ -88,9 +88,12 @@ def test_noise_free_payload_matches_pinocchio(kuka_tool, link):
     p_true = expected[link]
     for unload, with_model in ((unloaded, model), (None, None)):
         found = sj.identify_payload(robot, loaded, link, unloaded=unload, model=with_model,
-                                    urdf=urdf)
+                                    estimator=sj.WLS(), urdf=urdf)
         np.testing.assert_allclose(found.params10, p_true, atol=1e-7)
         assert found.mass == pytest.approx(MASS, rel=1e-9)
+        consistent = sj.identify_payload(robot, loaded, link, unloaded=unload,
+                                         model=with_model, urdf=urdf)  # the default
+        np.testing.assert_allclose(consistent.params10, p_true, atol=1e-6)
         assert found.moving_link == "lwr_7_link"
         np.testing.assert_allclose(found.com, p_true[7:] / MASS, atol=1e-8)
         if link == "tool0":  # the payload as it was defined, in its own frame
@@ -149,9 +152,9 @@ def test_std_matches_the_spread_over_noise_draws(rs010n_runs):
         unloaded, loaded = (sj.Measurements(m.times, m.q, m.qd, m.qdd,
                                             m.tau + sigma * rng.standard_normal(m.tau.shape))
                             for m in clean)
-        for weights in ("residual", sigma / 2):
+        for estimator in (sj.WLS(), sj.OLS(tuple(sigma / 2))):
             p = sj.identify_payload(robot, loaded, "link3", unloaded=unloaded, model=model,
-                                    sigma=weights, physical=False)
+                                    estimator=estimator)
             found.append((p.mass, *p.com, p.std["mass"], *p.std["com"]))
     found = np.array(found).reshape(30, 2, 8)
     ratio = found[..., :4].std(axis=0, ddof=1) / np.sqrt(np.mean(found[..., 4:] ** 2, axis=0))
@@ -179,14 +182,14 @@ def test_static_poses_leave_the_inertia_undetermined(rs010n_runs):
 
 
 def test_consistent_estimate_kept_else_projected(rs010n_runs):
-    """Noise-free: the unconstrained estimate is consistent and returned as it is. Noisy
-    with a small payload inertia: the estimate is projected onto bodies whose
-    pseudo-inertia is positive semidefinite."""
+    """Noise-free: the unconstrained estimate is consistent and the physically consistent
+    fit finds it. Noisy with a small payload inertia: the physically consistent fit keeps
+    the payload's pseudo-inertia positive semidefinite, the unconstrained one does not."""
     robot, _, runs = rs010n_runs
     unloaded, loaded = runs(0, noise=0.0)
     exact = sj.identify_payload(robot, loaded, "link3", unloaded=unloaded)
-    assert exact.physical == {"already_consistent": True}
-    np.testing.assert_array_equal(exact.params10, exact.unconstrained10)
+    assert exact.physical["already_consistent"] and exact.physical["status"] == "optimal"
+    np.testing.assert_allclose(exact.params10, exact.unconstrained10, rtol=1e-6, atol=1e-8)
     unloaded, loaded = runs(1, noise=0.05)
     noisy = sj.identify_payload(robot, loaded, "link3", unloaded=unloaded)
     assert np.linalg.eigvalsh(pseudo_inertia(noisy.unconstrained10)).min() < 0
@@ -221,8 +224,10 @@ def test_bad_arguments(rs010n_runs, kuka_tool):
         sj.identify_payload(robot.with_params(np.zeros(36)), loaded, "link3")
     with pytest.raises(ValueError, match="model: without unloaded"):
         sj.identify_payload(robot, loaded, "link3", model=sj.TorqueModel.of(robot))
-    with pytest.raises(ValueError, match="sigma"):
-        sj.identify_payload(robot, loaded, "link3", sigma="limits")
+    with pytest.raises(ValueError, match="limits"):
+        sj.identify_payload(robot, loaded, "link3", estimator=sj.WLS("limits"))
+    with pytest.raises(ValueError, match="least squares.*L1"):
+        sj.identify_payload(robot, loaded, "link3", estimator=sj.L1())
     kuka, urdf, _, kuka_loaded, _, _ = kuka_tool
     with pytest.raises(sj.dynamics.URDFError, match="fixed to the base"), \
             warnings.catch_warnings():

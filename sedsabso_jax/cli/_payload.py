@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> None:
         model = TorqueModel.of(robot, terms, transmission=transmission, recordings=count)
     estimator = WLS() if args.weights == "residual" else OLS()
     if args.physical:
-        estimator = PhysicallyConsistent(estimator)
+        estimator = PhysicallyConsistent(estimator, links=False)
     with files.urdf_source(args.robot) as urdf:
         payload = identify_payload(robot, loaded, args.link, unloaded=unloaded or None,
                                    estimator=estimator, model=model, urdf=urdf)
@@ -97,9 +97,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      help="row weights per joint: residual (Gautier's two-step, default) or "
                      "equal")
     est.add_argument("--physical", action=argparse.BooleanOptionalAction, default=True,
-                     help="physically consistent parameters (positive semidefinite "
-                     "pseudo-inertia of the payload and, in a joint fit with --data, of "
-                     "every link; friction >= 0; default); --no-physical: unconstrained")
+                     help="a physically consistent payload (positive semidefinite "
+                     "pseudo-inertia; the robot's links free; default); --no-physical: "
+                     "the unconstrained estimate")
     out = pp.add_argument_group("outputs", "written atomically: a failed run leaves none")
     out.add_argument("--json", metavar="PATH", default=None,
                      help="write the payload as JSON (payload.mass [kg], payload.com [m], "

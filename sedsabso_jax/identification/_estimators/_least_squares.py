@@ -37,7 +37,7 @@ from ._estimator import (
 )
 from .._model._torque_model import TorqueModel
 from .._options import as_float, as_floats, check_number
-from ._physical import PSD_MARGIN, fit_physical
+from ._physical import PSD_MARGIN, fit_bodies, fit_physical
 
 #: An estimator's ``sigma`` as kept: None, a weighting's name, or one number per joint.
 SigmaOption = str | tuple[float, ...] | None
@@ -119,12 +119,19 @@ class PhysicallyConsistent(Estimator):
 
     ``prior`` (full parameters, default the robot's own) is pulled toward with weight
     ``prior_weight`` plus ``prior_strength`` times the data term's mean curvature (the
-    scale-free form; :func:`~._validation.choose_prior_strength` chooses it)."""
+    scale-free form; :func:`~sedsabso_jax.choose_prior_strength` chooses it).
+
+    ``links=False`` leaves the robot's links (the base values) free and constrains only
+    the model's terms: coefficients ``>= 0`` and terms that are bodies (a payload) with a
+    positive semidefinite pseudo-inertia (:func:`~._physical.fit_bodies`; no full
+    parameters, no prior): a payload then cannot take up what an inconsistent robot
+    model leaves."""
 
     least_squares: AbstractLeastSquares = OLS()
     prior: tuple[float, ...] | None = eqx.field(default=None, converter=as_floats)
     prior_weight: float = eqx.field(default=0.0, converter=as_float)
     prior_strength: float = eqx.field(default=0.0, converter=as_float)
+    links: bool = True
     physical: ClassVar[bool] = True
     costly: ClassVar[bool] = False
     normal_equations: ClassVar[bool] = True
@@ -137,6 +144,12 @@ class PhysicallyConsistent(Estimator):
         check_prior(self.prior)
         check_number("prior_weight", self.prior_weight)
         check_number("prior_strength", self.prior_strength)
+        if not isinstance(self.links, bool):
+            raise ValueError(f"links must be True or False, got {self.links!r}")
+        if not self.links and (self.prior is not None or self.prior_weight
+                               or self.prior_strength):
+            raise ValueError("a prior pulls the links' full parameters: links=False has "
+                             "none (give no prior, prior_weight or prior_strength)")
 
     @property
     def name(self) -> str:
@@ -151,8 +164,9 @@ class PhysicallyConsistent(Estimator):
         return self.least_squares.default_weighting
 
     def settings(self) -> dict:
-        return {**weighting_settings(self), "prior_weight": self.prior_weight,
-                "prior_strength": self.prior_strength, "psd_margin": PSD_MARGIN}
+        out = {**weighting_settings(self), "prior_weight": self.prior_weight,
+               "prior_strength": self.prior_strength, "psd_margin": PSD_MARGIN}
+        return out if self.links else {**out, "links": False}
 
     def check(self, model: TorqueModel, limits: Limits) -> None:
         check_weighting(self, model, limits)
@@ -164,8 +178,12 @@ class PhysicallyConsistent(Estimator):
     def fit(self, problem: FitProblem) -> EstimatorFit:
         ls = self.least_squares
         rows = weigh(problem, ls.sigma, default=ls.default_weighting, factor=True)
-        fit = fit_physical(problem.model, rows.weighted_factor, prior_of(self.prior, problem.model),
-                           self.prior_weight, self.prior_strength)
+        if self.links:
+            fit = fit_physical(problem.model, rows.weighted_factor,
+                               prior_of(self.prior, problem.model), self.prior_weight,
+                               self.prior_strength)
+        else:
+            fit = fit_bodies(problem.model, rows.weighted_factor)
         extra = {"physical_fit": {"solver": fit.solver, "status": fit.status,
                                   "iterations": fit.iterations, "seconds": fit.seconds}}
         return EstimatorFit(np.asarray(fit.values, dtype=float), fit.full_params, rows.sigma,

@@ -38,6 +38,7 @@ import warnings
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
+from ...dynamics._inertia import pseudo_inertia
 from ...dynamics._robot import N_LINK_PARAMETERS
 from ...optim._linear import Factorization
 from .._model._torque_model import TorqueModel
@@ -54,7 +55,7 @@ class PhysicalFit:
     extras), the full parameters (12 per link), and the solver's report."""
 
     values: np.ndarray
-    full_params: np.ndarray
+    full_params: np.ndarray | None
     solver: str
     status: str
     iterations: int
@@ -167,3 +168,74 @@ def fit_physical(model: TorqueModel, factor: Factorization, prior: Float[ArrayLi
     return PhysicalFit(values=values_out, full_params=full, solver="Clarabel (cvxpy)",
                        status=str(problem.status), iterations=int(stats.num_iters or 0),
                        seconds=seconds)
+
+
+@functools.lru_cache(maxsize=32)
+def _bodies_programme(dim: int, rank: int, nonneg: tuple[int, ...], bodies: tuple[int, ...]):
+    """The least squares of :func:`fit_bodies` for one shape of model, its data as cvxpy
+    parameters (built and canonicalised once, as :func:`_programme`)."""
+    import cvxpy as cp
+
+    M = cp.Parameter((dim, dim), name="M")
+    c = cp.Parameter(dim, name="c")
+    root_ridge = cp.Parameter(nonneg=True, name="root_ridge")
+    pulled = cp.Parameter(dim, name="root_ridge_start")
+    x = cp.Variable(dim, name="x")
+    extras = x[rank:]
+    constraints = [extras[list(nonneg)] >= 0] if nonneg else []
+    for k, start in enumerate(bodies):
+        B = cp.Variable((4, 4), symmetric=True, name=f"body{k + 1}")
+        constraints += [B - PSD_MARGIN * np.eye(4) >> 0,
+                        extras[start:start + 10] == cp.hstack(_inertial_params(B))]
+    problem = cp.Problem(cp.Minimize(cp.norm(cp.hstack([M @ x - c, root_ridge * x - pulled]),
+                                             2)), constraints)
+    parameters = {"M": M, "c": c, "root_ridge": root_ridge, "pulled": pulled}
+    for v in parameters.values():
+        v.value = np.ones(v.shape) if v is root_ridge else np.zeros(v.shape)
+    problem.solve(solver=cp.CLARABEL)
+    return problem, parameters, x
+
+
+def fit_bodies(model: TorqueModel, factor: Factorization) -> PhysicalFit:
+    """Least squares with the constraints of the model's terms only: their coefficients
+    ``>= 0`` where a physical body has them so, and the terms that are bodies (a
+    payload) with a positive semidefinite pseudo-inertia; the base values free (the
+    links unconstrained). A pull of :data:`RIDGE` times the data term's mean curvature
+    toward the unconstrained minimum-norm solution keeps directions the data leave free
+    finite. Where the unconstrained solution already meets the constraints it is the
+    constrained optimum, and is returned as it is. ``full_params`` is None (no full link
+    parameters)."""
+    import cvxpy as cp
+
+    rank = model.base.rank
+    M = factor.R @ np.eye(model.dim)[factor.perm]
+    scale = max(float(np.linalg.norm(factor.c)), 1e-300)
+    ridge = RIDGE * float(np.sum(M ** 2)) / model.dim
+    nonneg = tuple(int(k) for k in np.flatnonzero(model.nonnegative[rank:]))
+    body = np.flatnonzero(model.bodies[rank:])
+    t0 = time.perf_counter()
+    free = factor.solve()
+    extras = free[rank:]
+    if np.all(extras[list(nonneg)] >= 0) and all(
+            np.linalg.eigvalsh(pseudo_inertia(extras[k:k + 10])).min() >= PSD_MARGIN
+            for k in body[::10]):
+        return PhysicalFit(free, None, "none (the least-squares solution is consistent)",
+                           "optimal", 0, time.perf_counter() - t0)
+    try:
+        problem, values, x = _bodies_programme(model.dim, rank, nonneg,
+                                               tuple(int(k) for k in body[::10]))
+        values["M"].value = M / scale
+        values["c"].value = factor.c / scale
+        values["root_ridge"].value = np.sqrt(ridge) / scale
+        values["pulled"].value = np.sqrt(ridge) / scale * free
+        problem.solve(solver=cp.CLARABEL)
+    except cp.error.SolverError as err:
+        raise RuntimeError(f"physically consistent fit: the conic solver failed: {err}") from None
+    if problem.status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
+        raise RuntimeError(f"physically consistent fit: Clarabel ended with status "
+                           f"{problem.status!r}; no consistent parameters were found")
+    stats = problem.solver_stats
+    return PhysicalFit(values=np.asarray(x.value, dtype=float), full_params=None,
+                       solver="Clarabel (cvxpy)", status=str(problem.status),
+                       iterations=int(stats.num_iters or 0),
+                       seconds=time.perf_counter() - t0)

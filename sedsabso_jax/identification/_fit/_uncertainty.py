@@ -107,13 +107,15 @@ def searched_std(model, out, samples, step: float = 1e-4) -> dict:
 def function_std(W: Float[np.ndarray, "m d"], residual: Float[np.ndarray, " m"],
                  G: Float[np.ndarray, "k d"]) -> Float[np.ndarray, " k"]:
     """The standard deviation of each row's function ``G x`` of the values, from the
-    same covariance as :func:`parameter_std` (columns scaled to unit norm): ``inf``
-    where ``G``'s row has a part the rows do not determine."""
+    covariance of :func:`parameter_std` (columns scaled to unit norm, a column of
+    rounding errors taken as zero): ``inf`` where ``G``'s row has a part the rows do not
+    determine."""
     W, residual = np.asarray(W, dtype=float), np.asarray(residual, dtype=float)
-    m, d = W.shape
+    m = W.shape[0]
     norms = np.linalg.norm(W, axis=0)
-    scale = np.where(norms > 0, norms, 1.0)
-    _, s, Vt = np.linalg.svd(W / scale, full_matrices=False)
+    live = norms > RANK_TOLERANCE * norms.max(initial=0.0)
+    scale = np.where(live, norms, 1.0)
+    _, s, Vt = np.linalg.svd(np.where(live, W / scale, 0.0), full_matrices=False)
     rank = int(np.sum(s > RANK_TOLERANCE * s[0])) if s.size and s[0] > 0 else 0
     g = np.atleast_2d(G) / scale
     if m <= rank:

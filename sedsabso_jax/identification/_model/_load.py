@@ -22,11 +22,11 @@ class LoadFriction(AbstractTerm):
     ``FLV_j |tau_load_j| qd_j`` (s/rad).
 
     The coefficients are bilinear with the rigid-body parameters. Without a load point
-    the term waits for one (:attr:`waiting`): the fit takes it from a least-squares fit
-    of the model without this term, then fits the model with that load (two linear fits,
-    any estimator); with ``fixed_point=True`` it goes on, reading each fit's values until
-    the load settles (``load:fixed-point``). The fitted model keeps the load its fit
-    used."""
+    the term waits for one (:attr:`waiting`; its columns meanwhile read the robot's own
+    parameters): the fit takes it from a least-squares fit of the model without this
+    term, then fits the model with that load (two linear fits, any estimator); with
+    ``fixed_point=True`` it goes on, reading each fit's values until the load settles
+    (``load:fixed-point``). The fitted model keeps the load its fit used."""
 
     viscous: bool = False
     fixed_point: bool = False
@@ -78,11 +78,11 @@ class LoadFriction(AbstractTerm):
         return tuple(f"{k}{j + 1}" for k in kinds for j in range(n))
 
     def columns(self, model: ModelView, s: Signals) -> Any:
-        if self.load_point is None and s.probe is None:
-            raise ValueError("LoadFriction's columns need its load point: fit the model "
-                             "(identify), or give LoadFriction(load_point=...)")
         xp, n = s.xp, model.robot.n_joints
-        load = xp.abs(s.rigid_torque(np.asarray(self.load_point)))
+        point = self.load_point
+        if point is None and s.probe is None:  # not fitted: the robot's own parameters
+            point = model.rigid_values(model.prior_values)
+        load = xp.abs(s.rigid_torque(np.asarray(point)))
         out = [diagonal(load * s.coulomb, n, xp)]
         if self.viscous:
             out.append(diagonal(load * s.qd, n, xp))

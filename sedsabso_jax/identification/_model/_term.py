@@ -131,6 +131,9 @@ class ModelView(Protocol):
 
     def rigid_values(self, values: np.ndarray) -> np.ndarray: ...
 
+    @property
+    def prior_values(self) -> np.ndarray: ...
+
 
 class AbstractTerm(eqx.Module):
     """A term of the torque model beyond the rigid-body base regressor (module

@@ -33,22 +33,16 @@ import jax
 import numpy as np
 from jaxtyping import ArrayLike, Float, Int
 
-from ...dynamics._base_parameters import (
-    RANK_TOLERANCE,
-    BaseParameters,
-    base_parameters,
-    random_states,
-)
+from ...dynamics._base_parameters import BaseParameters, base_parameters
 from ...dynamics._robot import Robot
 from ...measurements._transmission import Transmission, TransmissionLike, coupled_motors
 from .._search._methods import AbstractSearch, CoordinateSearch
 from ._order import canonical_order, friction_text
+from ._regrouping import kept_columns
 from ._term import AbstractTerm, Nonlinear, Signals
 
 #: How a model's nonlinear parameters are searched unless it says otherwise.
 DEFAULT_SEARCH = CoordinateSearch()
-#: Which extra columns a model keeps, per model structure (:func:`_kept`).
-_KEPT: dict[tuple, tuple[BaseParameters, np.ndarray]] = {}
 
 
 def _matrix(transmission: object) -> object:
@@ -181,33 +175,8 @@ class TorqueModel(eqx.Module):
 
     @property
     def _kept(self) -> np.ndarray:
-        """Indices of the extra columns that the base regressor does not span (found as
-        the base parameters are, at random states; once per structure of model)."""
-        key = (id(self.base), self.recordings,
-               None if self.transmission is None else self.transmission.tobytes(),
-               tuple((type(t), repr(sorted(t.settings().items()))) for t in self.terms))
-        if key not in _KEPT:
-            _KEPT[key] = (self.base, self._independent())
-        return _KEPT[key][1]
-
-    def _independent(self) -> np.ndarray:
-        if not self._extra_names():
-            return np.zeros(0, dtype=int)
-        robot = self.robot
-        # the sample count base_parameters uses: the regressor is compiled for it already
-        q, qd, qdd = random_states(robot, max(50, -(-4 * robot.n_params // robot.n_joints)),
-                                   seed=1)
-        recording = np.random.default_rng(1).integers(0, self.recordings, q.shape[0])
-        # a random torque for terms that read the model's own: which of their columns the
-        # base spans must not depend on the values they read
-        probe = np.random.default_rng(2).standard_normal(q.shape)
-        Y = self._full_regressor(q, qd, qdd, recording if self.recordings > 1 else None,
-                                 probe=probe)
-        W = Y.reshape(-1, Y.shape[-1])
-        W = W / np.where(np.linalg.norm(W, axis=0) > 0, np.linalg.norm(W, axis=0), 1.0)
-        d = np.abs(np.diag(np.linalg.qr(W, mode="r")))
-        independent = d > RANK_TOLERANCE * d.max()
-        return np.flatnonzero(independent[self.base.rank:])
+        """Indices of the extra columns that the base regressor does not span."""
+        return kept_columns(self)
 
     @property
     def regrouped(self) -> tuple[str, ...]:
@@ -257,6 +226,12 @@ class TorqueModel(eqx.Module):
             if shape is not None:
                 return shape, True
         return xp.sign(qd), False
+
+    @property
+    def prior_values(self) -> np.ndarray:
+        """The robot's own (a-priori) parameters as the model's values: projected on the
+        base, the extra columns 0."""
+        return np.r_[np.asarray(self.base.values, dtype=float), np.zeros(self.dim - self.base.rank)]
 
     def rigid_values(self, values: np.ndarray) -> np.ndarray:
         """The values (of :attr:`names`) of the rigid-body columns: the base columns but

@@ -52,8 +52,9 @@ from ._term import PayloadInertia, payload_frame
 
 #: A mass whose standard deviation exceeds this fraction of it is warned of.
 POOR_MASS = 0.1
-#: The estimator unless told: Gautier's weighted least squares, physically consistent.
-DEFAULT_ESTIMATOR = PhysicallyConsistent(WLS())
+#: The estimator unless told: Gautier's weighted least squares, the payload (and the
+#: model's terms) physically consistent, the robot's links free.
+DEFAULT_ESTIMATOR = PhysicallyConsistent(WLS(), links=False)
 
 
 def _recordings(robot: Robot, data: Data | None, label: str) -> list:
@@ -102,15 +103,14 @@ def _joint_fit(robot: Robot, recordings: list, model: TorqueModel, term: Payload
     """The robot's model and the payload fitted together (module docstring)."""
     full = TorqueModel.of(robot, (*model.terms, term), transmission=model.transmission,
                           base=model.base, recordings=model.recordings, search=model.search)
+    columns = np.array([full.names.index(n) for n in term.names(full)])
+    q, qd, qdd, tau, index = stacked(recordings)
+    Y = full.regressor(q, qd, qdd, index)  # before the fit: a mass it cannot see is refused
+    _determined(Y.reshape(-1, full.dim), tau.reshape(-1), _lift(full.dim, columns)[6], link)
     ident, out = identified(robot, recordings, estimator, full, None)
-    columns = np.array([ident.names.index(n) for n in term.names(full)])
     lift = _lift(len(ident.names), columns)
-    _determined(out.W, out.b, lift[6], link)
     p = ident.values[columns]
-    unconstrained = p
-    if estimator.physical:  # the same fit without the constraint, for comparison
-        free = identified(robot, recordings, estimator.least_squares, full, None)[0]
-        unconstrained = free.values[columns]
+    unconstrained = LinearFit.of(out.W, out.b).x[columns]  # the same rows, unconstrained
     residual = out.W @ ident.values - out.b
     rest = np.setdiff1d(np.arange(len(ident.names)), columns)
     return {"p": p, "unconstrained": unconstrained, "identification": ident,
@@ -168,8 +168,9 @@ def identify_payload(robot: Robot | Identification, loaded: Data, link: str, *,
         unloaded: recordings without the payload (one sampling rate with ``loaded``):
             the robot's model and the payload are fitted together.
         estimator: any of :func:`~sedsabso_jax.identify`'s with ``unloaded`` (default
-            :data:`DEFAULT_ESTIMATOR`, Gautier's WLS, physically consistent); a least-
-            squares one (OLS, WLS, or their physically consistent form) without.
+            :data:`DEFAULT_ESTIMATOR`: Gautier's WLS, the payload physically consistent,
+            the links free; ``PhysicallyConsistent(WLS())`` constrains the links too); a
+            least-squares one (OLS, WLS, or their physically consistent form) without.
         model: the robot's torque model in the joint fit (default: viscous and Coulomb
             friction and a torque offset per joint); one offset per recording counts the
             unloaded recordings first, then the loaded ones.

@@ -1,0 +1,50 @@
+"""Which extra columns of a torque model the base regressor already spans
+(:func:`kept_columns`): found as the base parameters are, at random states, once per
+structure of model. A term that is a body keeps its columns whole: its parameters are
+one body's, and those the data cannot tell apart are reported so (an infinite standard
+deviation), not dropped."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ...dynamics._base_parameters import RANK_TOLERANCE, BaseParameters, random_states
+
+#: Which extra columns a model keeps, per model structure.
+_KEPT: dict[tuple, tuple[BaseParameters, np.ndarray]] = {}
+
+
+def kept_columns(model: Any) -> np.ndarray:
+    """Indices of the extra columns of ``model`` (a :class:`~._torque_model.TorqueModel`)
+    that the base regressor does not span: scaled columns at random states, ordered QR
+    (as :func:`~sedsabso_jax.base_parameters`); kept per model structure (its base,
+    recordings, transmission and terms' settings)."""
+    key = (id(model.base), model.recordings,
+           None if model.transmission is None else model.transmission.tobytes(),
+           tuple((type(t), repr(sorted(t.settings().items()))) for t in model.terms))
+    if key not in _KEPT:
+        _KEPT[key] = (model.base, _independent(model))
+    return _KEPT[key][1]
+
+
+def _independent(model: Any) -> np.ndarray:
+    if not model._extra_names():
+        return np.zeros(0, dtype=int)
+    robot = model.robot
+    # the sample count base_parameters uses: the regressor is compiled for it already
+    q, qd, qdd = random_states(robot, max(50, -(-4 * robot.n_params // robot.n_joints)),
+                               seed=1)
+    recording = np.random.default_rng(1).integers(0, model.recordings, q.shape[0])
+    # a random torque for terms that read the model's own: which of their columns the
+    # base spans must not depend on the values they read
+    probe = np.random.default_rng(2).standard_normal(q.shape)
+    Y = model._full_regressor(q, qd, qdd, recording if model.recordings > 1 else None,
+                              probe=probe)
+    W = Y.reshape(-1, Y.shape[-1])
+    W = W / np.where(np.linalg.norm(W, axis=0) > 0, np.linalg.norm(W, axis=0), 1.0)
+    d = np.abs(np.diag(np.linalg.qr(W, mode="r")))
+    independent = d > RANK_TOLERANCE * d.max()
+    bodies = [term.body for term in model.terms for _ in term.names(model)]
+    return np.flatnonzero(independent[model.base.rank:] | np.array(bodies, dtype=bool))
