@@ -1,26 +1,23 @@
-"""Friction at rest (issue 30, part 3): Dahl's presliding state (``sj.Presliding``),
-its displacements recovered from simulated noisy data, and the optimisers on its search
-problem (``sj.identification.PreslidingProblem``: the displacements ``u = log q_c``, one
-per joint, searched; the linear values solved for each trial) with the same budget of
-fitness evaluations: SEDSABSO, LDWPSO, CMA-ES (evosax), optimistix's Levenberg-Marquardt
-through the scan's Jacobian, and scipy (Powell on the loss, as ``identify`` does; TRF
-least squares with the JAX Jacobian). Each is judged by the error its displacements
-give on held-out data (the linear values fitted on the fit data with them): the KUKA
-LWR4+'s run 2 (a repeat of run 1's trajectory, which never stands still) and the Staubli
-TX40's last 30 % (point to point, a fifth of its samples at rest; the state integrated
-along the whole recording). NRMS over the joint torque limits, %; seconds: compile and
-run apart (the swarms' compile from ``minimise``, the others' first call less a warm
-one).
+"""Friction at rest (``sj.Presliding``) and the search of a model's nonlinear parameters:
+Dahl's displacements recovered from simulated noisy data, the search methods on the
+shipped robots (the time of a fit and the error on data it did not see), the compiled
+population loss's speed, and the target of issue 35: ``presliding:fit`` against a fixed
+displacement, each chosen and judged as ``sedsabso-jax identify`` does.
 
     python -m benchmarks.friction_state [--json benchmarks/results/friction_state.json]
-    python -m benchmarks.friction_state --population-speed   # the population fitness only
+    python -m benchmarks.friction_state --population-speed  # the population loss only
+    python -m benchmarks.friction_state --versus-fixed      # KUKA: fitted vs fixed q_c
+    python -m benchmarks.friction_state --validation fitted # the robots' own validation
 
-Typical output (2-core AMD EPYC, 2026-11-26; see the JSON for every seed)::
-
-    | data | optimiser | seed | evaluations | fit [%] | validated [%] | compile s | run s |
-    | TX40 | no presliding term (OLS) | None | 1 | 1.6546 | 2.1155 | 0.00 | 0.00 |
-    | TX40 | LDWPSO | 0 | 1200 | 1.5326 | 1.3610 | 5.60 | 1.40 |
-    | TX40 | scipy TRF (JAX Jacobian) | None | 98 | 1.5325 | 1.3707 | 2.71 | 1.55 |
+The search methods (``sj.identification``): ``CoordinateSearch`` (the default), the
+package's swarms and CMA-ES through ``PopulationSearch`` with 1200 evaluations, and
+optimistix's Levenberg-Marquardt (``LeastSquaresSearch``), each in ``sj.identify`` with
+OLS (equal weights) and the model offset + smooth Coulomb + presliding:fit (+ coupling on
+the TX40): the KUKA LWR4+'s run 1 fitted, run 2 held out (a repeat of run 1's trajectory,
+which never stands still); the Franka Panda's and the Staubli TX40's first 70 % fitted,
+the last 30 % held out (the TX40 moves point to point, a fifth of its samples at rest).
+Errors: NRMS over the joint torque limits, %; seconds: the first fit in the process
+(compilation included) and a repeat.
 """
 
 from __future__ import annotations
@@ -40,11 +37,16 @@ import sedsabso_jax as sj
 from benchmarks.output import to_json
 from data import real_robots
 from sedsabso_jax.dynamics import joint_limits
-from sedsabso_jax.identification import PreslidingProblem, parse_friction
+from sedsabso_jax.identification import (
+    CoordinateSearch,
+    LeastSquaresSearch,
+    PopulationSearch,
+    Projection,
+    parse_friction,
+)
 
-BUDGET = 1200  # fitness evaluations per optimiser and seed
-SEEDS = (0, 1, 2)
 SIZES = (64, 256, 1024, 4096)
+BUDGET = 1200  # evaluations of a population search
 
 
 def nrms(pred, tau, limits) -> float:
@@ -97,8 +99,8 @@ def recovery(robot, name, noise, seed) -> dict:
     t0 = time.perf_counter()
     fit = sj.identify(robot, data, sj.OLS(), model)
     seconds = time.perf_counter() - t0
-    shapes = fit.settings["shapes"]
-    found = np.array([shapes[f"q_c{j + 1}"]["value"] for j in range(n)])
+    found_ = fit.settings["searched"]["parameters"]
+    found = np.array([found_[f"q_c{j + 1}"]["value"] for j in range(n)])
     fp_found = fit.values[[fit.names.index(f"FP{j + 1}") for j in range(n)]]
     return {"robot": name, "noise": noise, "seed": seed, "samples": len(t),
             "rest_fraction": float(np.mean(np.all(np.diff(q, axis=0) == 0, 1))),
@@ -109,170 +111,126 @@ def recovery(robot, name, noise, seed) -> dict:
             "seconds": seconds}
 
 
-# ---------------------------------------------------------------- the optimisers' table
-def cases():
-    """(name, model, fit problem, held-out problem, held-out torques, limits)."""
+# ---------------------------------------------------------------- the search methods
+def part(data: sj.Measurements, keep: np.ndarray) -> sj.Measurements:
+    return sj.Measurements(data.times[keep], data.q[keep], data.qd[keep], data.qdd[keep],
+                           data.tau[keep], source=data.source)
+
+
+def cases(tmp: Path):
+    """(name, robot, friction, transmission, fitted data, held-out data, limits)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the KUKA URDF's duplicate <origin>
         kuka = sj.robots.kuka_lwr4()
-    limits = joint_limits("kuka_lwr4", kuka).torque_limits
-    model = sj.TorqueModel.of(kuka, parse_friction("offset+presliding:fit"))
-    run1, run2 = sj.load_kuka_lwr4(1), sj.load_kuka_lwr4(2)
-    yield ("KUKA LWR4+ (run 1 -> run 2)", model, PreslidingProblem.of(model, run1,
-                                                                      weights=1 / limits),
-           PreslidingProblem.of(model, run2, weights=1 / limits), run2.tau, limits)
+    yield ("KUKA LWR4+ (run 1 -> run 2)", kuka, "offset+smooth+presliding:fit", None,
+           sj.load_kuka_lwr4(1), sj.load_kuka_lwr4(2),
+           joint_limits("kuka_lwr4", kuka).torque_limits)
+    panda = sj.robots.franka_panda()
+    data = sj.load_measurements(real_robots.panda_npz(tmp / "panda.npz"), n_joints=7,
+                                resample_hz=1000.0)
+    cut = np.arange(data.n_samples) < int(0.7 * data.n_samples)
+    yield ("Franka Panda (first 70 % -> last 30 %)", panda, "offset+smooth+presliding:fit",
+           None, part(data, cut), part(data, ~cut),
+           joint_limits("franka_panda", panda).torque_limits)
     tx40 = sj.robots.staubli_tx40()
-    limits = joint_limits("staubli_tx40", tx40).torque_limits
-    with tempfile.TemporaryDirectory() as tmp:
-        data, tr = real_robots.tx40_joint_side(Path(tmp))
-    model = sj.TorqueModel.of(tx40, parse_friction("offset+coupling+presliding:fit"),
-                              transmission=tr)
-    cut = int(0.7 * data.n_samples)
-    first, last = np.arange(cut), np.arange(cut, data.n_samples)
-    yield ("Staubli TX40 (first 70 % -> last 30 %)", model,
-           PreslidingProblem.of(model, data, first, weights=1 / limits),
-           PreslidingProblem.of(model, data, last, weights=1 / limits), data.tau[last], limits)
+    data, tr = real_robots.tx40_joint_side(tmp)
+    cut = np.arange(data.n_samples) < int(0.7 * data.n_samples)
+    yield ("Staubli TX40 (first 70 % -> last 30 %)", tx40,
+           "offset+smooth+coupling+presliding:fit", tr, part(data, cut), part(data, ~cut),
+           joint_limits("staubli_tx40", tx40).torque_limits)
 
 
-def judged(train, held, tau, limits, u) -> tuple[float, float]:
-    """(fit loss as NRMS %, held-out NRMS %) of the displacements ``exp(u)``."""
-    u = jnp.asarray(u)
-    values = train.solve(u)
-    fit = float(np.sqrt(np.mean(np.asarray(train.residual(u)).reshape(-1, len(limits)) ** 2,
-                                0)).mean() / 2 * 100)
-    return fit, nrms(np.asarray(held.predict(u, values)), tau, limits)
-
-
-def swarms(train, lo, hi, seed):
-    """(name, u, evaluations, compile s, run s) of each swarm's run with ``seed``."""
-    d = lo.size
-    for name, solver in (("SEDSABSO", sj.SEDSABSO()), ("LDWPSO", sj.LDWPSO()),
-                         ("CMA-ES (evosax)", sj.Evosax("CMA_ES"))):
-        iterations = sj.iterations_for_budget(solver, BUDGET, d)
-        res = sj.minimise(PreslidingProblem.fitness, solver, lo, hi,
-                          key=jax.random.key(seed), iterations=iterations, args=train)
-        yield name, np.asarray(res.x), int(res.n_evaluations), res.compile_s, res.run_s
-
-
-def gradient_based(train, lo, hi, u0):
-    """(name, u, evaluations, compile s, run s) of optimistix's LM and scipy's Powell
-    and TRF from ``u0`` (each Jacobian counted as ``d + 1`` evaluations)."""
-    import optimistix as optx
-    from scipy.optimize import least_squares, minimize
-
-    d = lo.size
-
-    def clipped(u, problem):
-        return problem.residual(jnp.clip(u, lo, hi))
-
-    steps = BUDGET // (d + 1)
-
-    @jax.jit
-    def lm(u, problem):
-        sol = optx.least_squares(clipped, optx.LevenbergMarquardt(rtol=1e-8, atol=1e-8), u,
-                                 args=problem, max_steps=steps, throw=False)
-        return jnp.clip(sol.value, lo, hi), sol.stats["num_steps"]
-
-    t0 = time.perf_counter()
-    jax.block_until_ready(lm(jnp.asarray(u0), train))
-    first = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    u, k = jax.block_until_ready(lm(jnp.asarray(u0), train))
-    run = time.perf_counter() - t0
-    yield "LM (optimistix)", np.asarray(u), int(k) * (d + 1), first - run, run
-
-    fitness = jax.jit(PreslidingProblem.fitness)
-    jacobian = jax.jit(jax.jacfwd(lambda u, p: p.residual(u)))
-    residuals = jax.jit(lambda u, p: p.residual(u))
-
-    def loss(u):
-        return fitness(u, train)
-
-    def jac(u):
-        return jacobian(u, train)
-
-    def residual(u):
-        return residuals(u, train)
-
-    t0 = time.perf_counter()
-    loss(jnp.asarray(u0)).block_until_ready()
-    compile_s = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    best = minimize(lambda u: float(loss(jnp.asarray(u))), u0, method="Powell",
-                    bounds=list(zip(lo, hi)), options={"maxfev": BUDGET, "xtol": 1e-3,
-                                                       "ftol": 1e-10})
-    yield "scipy Powell", best.x, int(best.nfev), compile_s, time.perf_counter() - t0
-    t0 = time.perf_counter()
-    jac(jnp.asarray(u0)).block_until_ready()
-    residual(jnp.asarray(u0)).block_until_ready()
-    compile_s = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    best = least_squares(lambda u: np.asarray(residual(jnp.asarray(u))), u0,
-                         jac=lambda u: np.asarray(jac(jnp.asarray(u))), bounds=(lo, hi),
-                         method="trf", max_nfev=steps)
-    yield ("scipy TRF (JAX Jacobian)", best.x, int(best.nfev) * (d + 1), compile_s,
-           time.perf_counter() - t0)
+METHODS = (("coordinate search (default)", CoordinateSearch()),
+           ("LDWPSO", PopulationSearch(sj.LDWPSO(), BUDGET)),
+           ("SEDSABSO", PopulationSearch(sj.SEDSABSO(), BUDGET)),
+           ("CMA-ES (evosax)", PopulationSearch(sj.Evosax("CMA_ES"), BUDGET)),
+           ("Levenberg-Marquardt (optimistix)", LeastSquaresSearch()))
 
 
 def table() -> list[dict]:
     rows = []
-    print("| data | optimiser | seed | evaluations | fit [%] | validated [%] | "
-          "compile [s] | run [s] |")
+    print("| data | search | trials | fit [%] | held out [%] | first s | repeat s | q_c "
+          "[mrad] |")
     print("|---|---|---|---|---|---|---|---|")
-    for name, model, train, held, tau, limits in cases():
-        term = next(t for t in model.terms if t.name == "presliding")
-        lo, hi = (np.full(train.dq.shape[1], np.log(b)) for b in term.bounds)
-        u0 = np.full(lo.size, np.log(sj.Presliding().displacement))
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, robot, friction, tr, fitted, held, limits in cases(Path(tmp)):
+            base = sj.base_parameters(robot)
+            fixed = sj.TorqueModel.of(robot, parse_friction(friction.replace(":fit", "")),
+                                      transmission=tr, base=base)
+            trials = [("a fixed displacement (2 mrad)", fixed)] + [
+                (label, sj.TorqueModel.of(robot, parse_friction(friction), transmission=tr,
+                                          base=base, search=method))
+                for label, method in METHODS]
+            for label, model in trials:
+                seconds = []
+                for _ in range(2):
+                    t0 = time.perf_counter()
+                    fit = sj.identify(robot, fitted, sj.OLS(), model, limits=limits)
+                    seconds.append(time.perf_counter() - t0)
+                searched = fit.settings.get("searched", {})
+                q_c = [v["value"] * 1e3 for v in searched.get("parameters", {}).values()]
+                row = {"data": name, "search": label, "trials": searched.get("evaluations", 1),
+                       "fit": fit.fit["nrms_limits_percent"],
+                       "held_out": nrms(fit.predict(held.q, held.qd, held.qdd), held.tau,
+                                        limits),
+                       "first_s": seconds[0], "repeat_s": seconds[1], "q_c_mrad": q_c}
+                rows.append(row)
+                print(f"| {name} | {label} | {row['trials']} | {row['fit']:.4f} | "
+                      f"{row['held_out']:.4f} | {seconds[0]:.1f} | {seconds[1]:.1f} | "
+                      f"{', '.join(f'{v:.3g}' for v in q_c)} |", flush=True)
+    return rows
 
-        def show(row):
+
+# ---------------------------------------------------------------- the issue's target
+def versus_fixed(repeats: int = 2) -> list[dict]:
+    """The KUKA's run 1, OLS with equal weights, physically consistent, offset + smooth
+    Coulomb + load friction + presliding, the displacement fixed (2 mrad) or searched:
+    chosen and judged as ``sedsabso-jax identify`` does (the default validation, run 2
+    held out), both in one process, alternating; seconds of each whole call."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        kuka = sj.robots.kuka_lwr4()
+    limits = joint_limits("kuka_lwr4", kuka).torque_limits
+    run1, run2 = sj.load_kuka_lwr4(1), sj.load_kuka_lwr4(2)
+    base = sj.base_parameters(kuka)
+    rows = []
+    print("| presliding | call | seconds | validated [%] | held out [%] |")
+    print("|---|---|---|---|---|")
+    for k in range(repeats):
+        for text in ("offset+smooth+load+presliding", "offset+smooth+load+presliding:fit"):
+            model = sj.TorqueModel.of(kuka, parse_friction(text), base=base)
+            t0 = time.perf_counter()
+            report = sj.select_and_identify(kuka, run1, held_out=run2, limits=limits,
+                                            models=model, estimators=sj.OLS(),
+                                            physical=True)
+            seconds = time.perf_counter() - t0
+            row = {"friction": text, "call": k + 1, "seconds": seconds,
+                   "validated": report.cross_validation.score,
+                   "held_out": report.validation.nrms_limits_percent}
             rows.append(row)
-            print(f"| {name} | {row['optimiser']} | {row['seed']} | {row['evaluations']} | "
-                  f"{row['fit']:.4f} | {row['validated']:.4f} | {row['compile_s']:.2f} | "
-                  f"{row['run_s']:.2f} |", flush=True)
-
-        # the same model without the state (OLS), and with the default displacement fixed
-        A, w = np.asarray(train.A), np.asarray(train.weights)
-        x = np.linalg.lstsq(A.reshape(-1, A.shape[-1]), np.asarray(train.tau).reshape(-1),
-                            rcond=None)[0] / np.asarray(train.scale)
-        fit_res = A @ (x * np.asarray(train.scale)) - np.asarray(train.tau)
-        pred = (np.asarray(held.A) @ (x * np.asarray(held.scale))) / w
-        show({"data": name, "optimiser": "no presliding term (OLS)", "seed": None,
-              "evaluations": 1, "fit": float(np.mean(np.sqrt(np.mean(fit_res ** 2, 0)))
-                                             / 2 * 100),
-              "validated": nrms(pred, tau, limits), "compile_s": 0.0, "run_s": 0.0,
-              "q_c": None})
-        fit0, val0 = judged(train, held, tau, limits, u0)
-        show({"data": name, "optimiser": "presliding, q_c = 2 mrad fixed", "seed": None,
-              "evaluations": 1, "fit": fit0, "validated": val0, "compile_s": 0.0,
-              "run_s": 0.0, "q_c": np.exp(u0).tolist()})
-        found = [*((s, r) for s in SEEDS for r in swarms(train, lo, hi, s)),
-                 *((None, r) for r in gradient_based(train, lo, hi, u0))]
-        for seed, (optimiser, u, evaluations, compile_s, run_s) in found:
-            fit, val = judged(train, held, tau, limits, u)
-            show({"data": name, "optimiser": optimiser, "seed": seed,
-                  "evaluations": evaluations, "fit": fit, "validated": val,
-                  "compile_s": float(compile_s or 0.0), "run_s": float(run_s),
-                  "q_c": np.exp(u).tolist()})
+            print(f"| {text.rpartition('+')[2]} | {k + 1} | {seconds:.1f} | "
+                  f"{row['validated']:.4f} | {row['held_out']:.4f} |", flush=True)
     return rows
 
 
 # ---------------------------------------------------------------- the package's validation
 def validation(fitted: bool) -> list[dict]:
-    """Each real robot's default candidate with most friction (offset + qd|qd| + smooth
-    Coulomb, + coupling on the TX40) with and without the presliding state, OLS, judged by
-    the default's own validation (phase folds and speed splits pooled, fold by fold):
+    """Each real robot's default candidate with most friction (offset + smooth Coulomb +
+    load, + coupling on the TX40) with and without the presliding state, OLS, judged by
+    the default's own validation (phase folds and speed splits pooled, split by split):
     what would decide whether the state joins the candidates."""
+    from benchmarks.real_robots import datasets
+
     rows = []
-    print("| robot | friction | validation [%] | folds better | seconds |")
+    print("| robot | friction | validation [%] | splits better | seconds |")
     print("|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
-        for name, robot, data, limits, tr, _ in real_robots_datasets(Path(tmp)):
+        for name, robot, data, limits, tr, _ in datasets(Path(tmp)):
             base = sj.base_parameters(robot)
             coupled = "+coupling" if tr is not None else ""
-            texts = [f"offset+quadratic+smooth{coupled}",
-                     f"offset+quadratic+smooth{coupled}+presliding"]
+            texts = [f"offset+smooth+load{coupled}", f"offset+smooth+load{coupled}+presliding"]
             if fitted:
-                texts.append(f"offset+quadratic+smooth{coupled}+presliding:fit")
+                texts.append(f"offset+smooth+load{coupled}+presliding:fit")
             first = None
             for text in texts:
                 model = sj.TorqueModel.of(robot, parse_friction(text), transmission=tr,
@@ -280,7 +238,8 @@ def validation(fitted: bool) -> list[dict]:
                 t0 = time.perf_counter()
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
-                    cv = sj.cross_validate(robot, data, sj.OLS(), model, limits=limits,
+                    cv = sj.cross_validate(robot, data, sj.OLS(), model,
+                                           limits=limits.torque_limits,
                                            validation=sj.Pooled((sj.PhaseFolds(),
                                                                  sj.SpeedSplits())))
                 first = cv if first is None else first
@@ -293,39 +252,42 @@ def validation(fitted: bool) -> list[dict]:
     return rows
 
 
-def real_robots_datasets(tmp: Path):
-    """(name, robot, data, limits, transmission, None) of the three shipped robots."""
-    from benchmarks.real_robots import datasets
-
-    for name, robot, data, limits, tr, _ in datasets(tmp):
-        yield name, robot, data, limits.torque_limits, tr, None
-
-
 # ---------------------------------------------------------------- population speed
 def population_speed() -> list[dict]:
-    """The KUKA run 1 problem's fitness of a population in one vmapped call: compile
-    (ahead of time) and run (median of 3, ``block_until_ready``) apart."""
-    _, _, train, _, _, _ = next(cases())
+    """The KUKA run 1 problem's loss (offset + smooth Coulomb + presliding:fit) for a
+    population in one vmapped call: compile (ahead of time) and run (median of 3,
+    ``block_until_ready``) apart, the state by the sequential and by the associative
+    scan (``sj.Presliding(scan=...)``)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        kuka = sj.robots.kuka_lwr4()
+    run1 = sj.load_kuka_lwr4(1)
+    base = sj.base_parameters(kuka)
     rows = []
     print(f"device: {jax.devices()[0].device_kind}")
-    print("| population | compile [s] | run [s] | evaluations/s |")
-    print("|---|---|---|---|")
+    print("| state | population | compile [s] | run [s] | evaluations/s |")
+    print("|---|---|---|---|---|")
     rng = np.random.default_rng(0)
-    for size in SIZES:
-        u = jnp.asarray(rng.uniform(np.log(1e-4), np.log(0.1), (size, train.dq.shape[1])))
-        t0 = time.perf_counter()
-        compiled = jax.jit(jax.vmap(PreslidingProblem.fitness, (0, None))).lower(
-            u, train).compile()
-        compile_s = time.perf_counter() - t0
-        times = []
-        for _ in range(3):
+    for scan in ("sequential", "associative"):
+        model = sj.TorqueModel.of(kuka, (sj.Offset(), sj.SmoothCoulomb(),
+                                         sj.Presliding(fitted=True, scan=scan)), base=base)
+        problem = Projection.of(model, run1)
+        for size in SIZES:
+            u = jnp.asarray(rng.uniform(np.log(1e-4), np.log(0.1), (size, 7)))
+            f = jax.jit(jax.vmap(lambda v, p: p.loss(v), (0, None)))
             t0 = time.perf_counter()
-            compiled(u, train).block_until_ready()
-            times.append(time.perf_counter() - t0)
-        run_s = float(np.median(times))
-        rows.append({"population": size, "compile_s": compile_s, "run_s": run_s,
-                     "evaluations_per_s": size / run_s})
-        print(f"| {size} | {compile_s:.2f} | {run_s:.4f} | {size / run_s:.0f} |", flush=True)
+            compiled = f.lower(u, problem).compile()
+            compile_s = time.perf_counter() - t0
+            times = []
+            for _ in range(3):
+                t0 = time.perf_counter()
+                compiled(u, problem).block_until_ready()
+                times.append(time.perf_counter() - t0)
+            run_s = float(np.median(times))
+            rows.append({"state": scan, "population": size, "compile_s": compile_s,
+                         "run_s": run_s, "evaluations_per_s": size / run_s})
+            print(f"| {scan} | {size} | {compile_s:.2f} | {run_s:.4f} | {size / run_s:.0f} |",
+                  flush=True)
     return rows
 
 
@@ -335,13 +297,17 @@ def main(argv=None) -> None:
     ap.add_argument("--validation", choices=("fixed", "fitted"), default=None,
                     help="only the real robots' validation with and without the state")
     ap.add_argument("--population-speed", action="store_true",
-                    help="only time the state model's population fitness (under 2 minutes)")
+                    help="only time the population loss (a few minutes)")
+    ap.add_argument("--versus-fixed", action="store_true",
+                    help="only the KUKA's fitted against fixed displacement (issue 35)")
     args = ap.parse_args(argv)
     jax.config.update("jax_enable_x64", True)
     out: dict = {"machine": {"platform": platform.platform(), "processor": platform.processor(),
-                             "device": jax.devices()[0].device_kind}, "budget": BUDGET}
+                             "device": jax.devices()[0].device_kind}}
     if args.population_speed:
         out["population_speed"] = population_speed()
+    elif args.versus_fixed:
+        out["versus_fixed"] = versus_fixed()
     elif args.validation:
         out["validation"] = validation(args.validation == "fitted")
     else:
@@ -357,7 +323,7 @@ def main(argv=None) -> None:
                           f"{row['q_c_max_error_percent']:.1f} | "
                           f"{row['FP_max_error_percent']:.1f} | {row['seconds']:.1f} |",
                           flush=True)
-        out["optimisers"] = table()
+        out["searches"] = table()
     if args.json:
         with open(args.json, "w", encoding="utf-8") as f:
             f.write(to_json(out))

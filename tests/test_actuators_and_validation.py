@@ -13,12 +13,11 @@ import pytest
 
 import sedsabso_jax as sj
 from sedsabso_jax import cli
-from sedsabso_jax.identification._model import TorqueModel
-from sedsabso_jax.identification._validation import (
+from sedsabso_jax.identification._model._torque_model import TorqueModel
+from sedsabso_jax.identification._validation._phase import phase_folds, repeat_period
+from sedsabso_jax.identification._validation._selection import (
     choose_prior_strength,
     cross_validate,
-    phase_folds,
-    repeat_period,
     select_model,
 )
 from sedsabso_jax.measurements._transmission import Transmission

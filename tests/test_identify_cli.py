@@ -222,7 +222,7 @@ def test_json_creates_its_directory(rs010n_files, tmp_path):
 def test_prior_strength_chosen_by_cross_validation(rs010n_files, tmp_path, capsys):
     """``--physical --prior-strength cv``: every strength of the grid cross-validated, the
     choice and its table in the JSON and the text; the grid is the library's."""
-    from sedsabso_jax.identification._validation import PRIOR_STRENGTHS
+    from sedsabso_jax.identification._validation._selection import PRIOR_STRENGTHS
 
     js = tmp_path / "r.json"
     assert cli.main(["identify", "--robot", "rs010n", "--data", rs010n_files[0], "--method",

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import sedsabso_jax as sj
-from sedsabso_jax.identification._model import TorqueModel
+from sedsabso_jax.identification._model._torque_model import TorqueModel
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))

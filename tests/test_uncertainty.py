@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import sedsabso_jax as sj
-from sedsabso_jax.identification._fitting import FitProblem
-from sedsabso_jax.identification._uncertainty import parameter_std, relative_std_percent
+from sedsabso_jax.identification._estimators._estimator import FitProblem
+from sedsabso_jax.identification._fit._uncertainty import parameter_std, relative_std_percent
 
 SAMPLES = 40  # few rows: the residual's degrees of freedom (m - d) matter
 SIGMA = np.array([0.5, 2.0, 5.0])  # N m, per joint: the weighting matters

@@ -13,8 +13,8 @@ import pytest
 import sedsabso_jax as sj
 from sedsabso_jax import cli
 from sedsabso_jax.identification import FitProblem
-from sedsabso_jax.identification._compressed import subset_problems
-from sedsabso_jax.identification._physical import _programme
+from sedsabso_jax.identification._fit._samples import Samples
+from sedsabso_jax.identification._estimators._physical import _programme
 
 
 def _status(argv) -> int:
@@ -102,6 +102,15 @@ def test_the_rule_prefers_the_physically_consistent_fit_within_a_standard_error(
 
 
 # ---------------------------------------------------------- fits on the normal equations
+def subset_problems(model, data, limits, masks):
+    """The compressed problems of a validation's subsets (the whole's rows at hand, so that
+    a subset that is most of the samples takes the whole's normal equations less the
+    rows it leaves out)."""
+    samples = Samples(data.q, data.qd, data.qdd, data.tau)
+    samples.rows(model)
+    return [samples.subset(mask).problem(model, limits) for mask in masks]
+
+
 @pytest.mark.parametrize("sigma", [None, "residual", "limits"])
 def test_fits_on_normal_equations_are_least_squares_on_the_rows(sigma):
     """A validation's subset fits, from the normal equations of all rows minus the
@@ -114,7 +123,7 @@ def test_fits_on_normal_equations_are_least_squares_on_the_rows(sigma):
     Y = model.regressor(data.q, data.qd, data.qdd)
     keep = np.arange(len(Y)) % 4 != 0  # most samples: all minus the left-out rows
     slow = np.abs(data.qd[:, 0]) < 0.3 * np.abs(data.qd[:, 0]).max()  # a minority
-    for mask, problem in zip((keep, slow), subset_problems(model, Y, data.tau, limits,
+    for mask, problem in zip((keep, slow), subset_problems(model, data, limits,
                                                            [keep, slow])):
         Ys, tau = Y[mask], data.tau[mask]
         if sigma is None:
@@ -143,7 +152,7 @@ def test_physical_fit_is_the_same_on_rows_and_normal_equations_and_repeats_exact
     _programme.cache_clear()
     rows = [estimator.fit(FitProblem(model, Y[mask], data.tau[mask], warn=False)).x
             for _ in range(2)]
-    compressed = estimator.fit(subset_problems(model, Y, data.tau, None, [mask])[0]).x
+    compressed = estimator.fit(subset_problems(model, data, None, [mask])[0]).x
     np.testing.assert_array_equal(rows[0], rows[1])
     np.testing.assert_allclose(Y @ compressed, Y @ rows[0], atol=1e-7 * np.abs(data.tau).max())
 

@@ -6,8 +6,8 @@
 ``run`` writes what ``identify`` (three shipped robots, several estimators and models),
 ``reproduce`` and ``compare --runs 5`` write into OUT; ``diff`` compares two snapshots
 file by file, byte for byte, except the timings: JSON keys that hold seconds
-(``seconds``, ``*_s``, ``time*``) are dropped, and lines of text that print seconds are
-masked.
+(``seconds``, ``*_s``, ``time*``) are dropped, lines of text that print seconds are
+masked, and progress lines (``identify: 37/372 fits, ...``) are left out.
 """
 
 from __future__ import annotations
@@ -71,6 +71,7 @@ def run(out: Path, only: str | None) -> None:
 
 
 TIMING_KEY = re.compile(r"(seconds|_s|^time.*|^elapsed.*|^version)$")
+PROGRESS = re.compile(r"^(identify|compare): \d+/\d+ ")
 TIMING_TEXT = re.compile(r"\d+(\.\d+)?\s*(s|ms|min)\b|\d+(\.\d+)?s\b|sedsabso-jax \d+\.\d+")
 
 
@@ -94,6 +95,8 @@ def _masked(text: str) -> list[str]:
     of table columns whose header says seconds (``[s]``)."""
     out, timed = [], set()
     for line in text.splitlines():
+        if PROGRESS.match(line):
+            continue
         cells = line.split("|")
         if line.startswith("|") and not set(line) <= set("|:- "):
             if any("[s]" in c for c in cells):  # a header row

@@ -7,7 +7,8 @@ from __future__ import annotations
 import argparse
 import math
 import os
-from typing import Any
+import time
+from typing import Any, TextIO
 
 from ._common import (
     Progress,
@@ -30,6 +31,31 @@ from ._loading import (
 #: ``--method``, ``--weights`` and ``--friction`` left to validation.
 AUTO = "auto"
 WEIGHTS = (AUTO, "residual", "limits", "equal")
+#: Where stderr is not a terminal, a line each time this fraction of the fits is done.
+LINE_EVERY = 0.1
+
+
+class IdentifyProgress(Progress):
+    """A bar of fits on a terminal; elsewhere (a log file) a line each time another
+    :data:`LINE_EVERY` of the fits is done, with the time so far and the time left at
+    that pace."""
+
+    def __init__(self, stream: TextIO | None = None):
+        super().__init__("identify", stream)
+        self.start, self.shown = time.perf_counter(), 0
+
+    def __call__(self, label: str, done: int, total: int) -> None:
+        if self.stream.isatty():
+            super().__call__(label, done, total)
+            return
+        step = max(1, math.ceil(LINE_EVERY * total))
+        if done < total and done < self.shown + step:
+            return
+        self.shown = done
+        elapsed = time.perf_counter() - self.start
+        left = elapsed * (total - done) / max(done, 1)
+        print(f"identify: {done}/{total} fits, {elapsed:.0f} s, ~{left / 60:.1f} min left: "
+              f"{label}", file=self.stream, flush=True)
 
 
 def _prior_strength(text: str):
@@ -108,7 +134,7 @@ def run(args: argparse.Namespace) -> None:
                          f"(a URDF's <limit effort=...>)")
     models = candidate_models(robot, frictions, transmission=transmission,
                               recordings=len(data) if args.offset_per_recording else 1)
-    with Progress("identify") as progress:  # validation fits, conic solves
+    with IdentifyProgress() as progress:  # validation fits, conic solves
         report = select_and_identify(robot, data, held_out=held_out, limits=limits,
                                      models=models, estimators=estimators,
                                      validation=choice.validation, physical=physical,

@@ -31,10 +31,11 @@ import dataclasses
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float
+from jaxtyping import Array, ArrayLike, Float
 
 from .._model._term import Signals, diagonal
 from .._model._torque_model import TorqueModel
+from .._recordings import Data
 from ._samples import Samples
 
 #: Tikhonov term of the normal equations, relative to their largest diagonal entry (the
@@ -101,10 +102,24 @@ class Projection(eqx.Module):
     recipe: Recipe = eqx.field(static=True)
 
     @classmethod
-    def of(cls, model: TorqueModel, samples: Samples, weights: np.ndarray) -> Projection:
+    def of(cls, model: TorqueModel, data: Samples | Data,
+           weights: Float[ArrayLike, " n"] | None = None,
+           keep: ArrayLike | None = None) -> Projection:
         """The problem of ``model``'s nonlinear parameters (from their values in the
-        model) at ``samples`` (all, or a validation's subset), each joint's rows times
-        ``weights``."""
+        model) at ``data`` (recordings as :func:`~sedsabso_jax.identify` takes them, or a
+        fit's samples), at the samples ``keep`` selects (a mask or indices; None: all),
+        each joint's rows times ``weights`` (e.g. ``1 / limits``; None: 1)."""
+        n = model.robot.n_joints
+        weights = np.ones(n) if weights is None else np.asarray(weights, dtype=float)
+        if weights.shape != (n,) or not np.all(np.isfinite(weights) & (weights > 0)):
+            raise ValueError(f"weights must be {n} finite numbers > 0, got {weights!r}")
+        samples = data if isinstance(data, Samples) else Samples.of(model.robot, data)
+        if keep is not None:
+            samples = samples.subset(np.asarray(keep))
+        return cls._of(model, samples, weights)
+
+    @classmethod
+    def _of(cls, model: TorqueModel, samples: Samples, weights: np.ndarray) -> Projection:
         found = model.nonlinear()
         if not found:
             raise ValueError(f"the torque model {model.friction!r} has no parameters to "

@@ -11,7 +11,9 @@ import numpy as np
 
 from .._estimators._estimator import FitProblem
 from .._estimators._normal_equations import NormalEquations
+from ...dynamics._robot import Robot
 from .._model._torque_model import TorqueModel
+from .._recordings import Data, recordings_of, stacked
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -35,6 +37,14 @@ class Samples:
     whole: Samples | None = None
     keep: np.ndarray | None = None
     _kept: dict = dataclasses.field(default_factory=dict, repr=False)
+
+    @classmethod
+    def of(cls, robot: Robot, data: Data) -> Samples:
+        """The samples of ``data`` (:data:`~.._recordings.Data`), the recordings stacked,
+        each sample's recording kept where there are several."""
+        recordings = recordings_of(robot, data)
+        q, qd, qdd, tau, index = stacked(recordings)
+        return cls(q, qd, qdd, tau, index if len(recordings) > 1 else None)
 
     def _cached(self, kind: str, owner: Any, make) -> Any:
         """``make()``, kept per (``kind``, ``owner``); ``owner`` is kept alive with it."""

@@ -118,7 +118,10 @@ _dahl_state = jax.jit(dahl_state, static_argnames="sequential")
 
 
 def presliding_state(dq: Float[ArrayLike, "T n"], start: Bool[ArrayLike, " T"],
-                     q_c: Float[ArrayLike, " n"]) -> Float[np.ndarray, "T n"]:
+                     q_c: Float[ArrayLike, " n"], sequential: bool | None = None
+                     ) -> Float[np.ndarray, "T n"]:
     """:func:`dahl_state` as a NumPy array (compiled once per shape)."""
+    if sequential is None:
+        sequential = jax.default_backend() in SEQUENTIAL
     return np.asarray(_dahl_state(np.asarray(dq, dtype=float), np.asarray(start),
-                                  np.asarray(q_c, dtype=float)))
+                                  np.asarray(q_c, dtype=float), sequential=sequential))

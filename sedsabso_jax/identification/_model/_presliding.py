@@ -13,6 +13,8 @@ from ._term import ModelView, Signals, diagonal
 
 #: Characteristic displacement (rad or m) of :class:`Presliding` unless told.
 PRESLIDING_DISPLACEMENT = 0.002
+#: How :class:`Presliding`'s state may be integrated.
+SCANS = ("auto", "sequential", "associative")
 
 
 class Presliding(AbstractScale):
@@ -25,11 +27,14 @@ class Presliding(AbstractScale):
     still and the gradual reversal. ``displacement`` is ``q_c`` (rad or m, > 0: one, one
     per joint, or with ``fitted=True`` one per joint searched by the fit within
     :attr:`bounds`). The columns read each recording's samples in time order, whole: a
-    subset's rows are the whole recording's, taken."""
+    subset's rows are the whole recording's, taken. ``scan``: how the state is
+    integrated, ``"sequential"`` (a ``lax.scan``), ``"associative"`` (a prefix
+    composition, parallel in time) or ``"auto"``, per backend (:data:`~._dahl.SEQUENTIAL`)."""
 
     displacement: float | tuple[float, ...] = eqx.field(default=PRESLIDING_DISPLACEMENT,
                                                         converter=as_scale)
     fitted: bool = False
+    scan: str = "auto"
     name: ClassVar[str] = "presliding"
     nonnegative: ClassVar[bool] = True
     #: The displacements' search box (rad or m).
@@ -39,6 +44,10 @@ class Presliding(AbstractScale):
     default_scale: ClassVar[float] = PRESLIDING_DISPLACEMENT
     symbol: ClassVar[str] = "q_c"
 
+    def __check_init__(self):  # equinox also runs AbstractScale's
+        if self.scan not in SCANS:
+            raise ValueError(f"Presliding's scan must be one of {SCANS}, got {self.scan!r}")
+
     def names(self, model: ModelView) -> tuple[str, ...]:
         n = model.robot.n_joints
         self.per_joint(n)
@@ -47,8 +56,13 @@ class Presliding(AbstractScale):
     def columns(self, model: ModelView, s: Signals) -> Any:
         n = model.robot.n_joints
         dq, start = s.increments()
+        sequential = None if self.scan == "auto" else self.scan == "sequential"
         if s.xp is jnp:  # inside a compiled search: the state of the trial's q_c
-            z = dahl_state(dq, start, self.per_joint(n, jnp))
+            z = dahl_state(dq, start, self.per_joint(n, jnp), sequential=sequential)
         else:
-            z = presliding_state(dq, start, self.per_joint(n))
+            z = presliding_state(dq, start, self.per_joint(n), sequential)
         return diagonal(s.taken(z), n, s.xp)
+
+    def settings(self) -> dict:
+        out = super().settings()
+        return out if self.scan == "auto" else {**out, "presliding_scan": self.scan}
