@@ -141,7 +141,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        "tcp://10.0.0.5:8786 (one dask-jobqueue starts)")
     execution.add_argument("--scheduler-timeout", type=_common.positive_float, default=20.0,
                            metavar="SECONDS",
-                           help="how long to try to reach the scheduler (20)")
+                           help="how long to try to reach the scheduler, Dask's handshake "
+                           "included (20)")
     outputs = cp.add_argument_group("outputs")
     outputs.add_argument("--out", default="compare-results",
                          help="directory for the report, figures, task files and COCO "
