@@ -112,9 +112,7 @@ def recovery(robot, name, noise, seed) -> dict:
 # ---------------------------------------------------------------- the optimisers' table
 def cases():
     """(name, model, fit problem, held-out problem, held-out torques, limits)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the KUKA URDF's duplicate <origin>
-        kuka = sj.robots.kuka_lwr4()
+    kuka = sj.robots.kuka_lwr4()
     limits = joint_limits("kuka_lwr4", kuka).torque_limits
     model = sj.TorqueModel.of(kuka, parse_friction("offset+presliding:fit"))
     run1, run2 = sj.load_kuka_lwr4(1), sj.load_kuka_lwr4(2)
