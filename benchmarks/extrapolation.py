@@ -161,9 +161,7 @@ def estimators() -> tuple[sj.Estimator, ...]:
 
 def study(plants: int, loto: bool = False, only: list[int] | None = None,
           with_far: bool = False) -> dict:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the KUKA URDF's duplicate <origin>
-        robot = sj.robots.kuka_lwr4()
+    robot = sj.robots.kuka_lwr4()
     limits = joint_limits("kuka_lwr4", robot)
     tau_max = np.asarray(limits.tau_max)
     base = sj.base_parameters(robot)

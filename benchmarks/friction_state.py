@@ -119,9 +119,7 @@ def part(data: sj.Measurements, keep: np.ndarray) -> sj.Measurements:
 
 def cases(tmp: Path):
     """(name, robot, friction, transmission, fitted data, held-out data, limits)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the KUKA URDF's duplicate <origin>
-        kuka = sj.robots.kuka_lwr4()
+    kuka = sj.robots.kuka_lwr4()
     yield ("KUKA LWR4+ (run 1 -> run 2)", kuka, "offset+smooth+presliding:fit", None,
            sj.load_kuka_lwr4(1), sj.load_kuka_lwr4(2),
            joint_limits("kuka_lwr4", kuka).torque_limits)
@@ -187,9 +185,7 @@ def versus_fixed(repeats: int = 2) -> list[dict]:
     Coulomb + load friction + presliding, the displacement fixed (2 mrad) or searched:
     chosen and judged as ``sedsabso-jax identify`` does (the default validation, run 2
     held out), both in one process, alternating; seconds of each whole call."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        kuka = sj.robots.kuka_lwr4()
+    kuka = sj.robots.kuka_lwr4()
     limits = joint_limits("kuka_lwr4", kuka).torque_limits
     run1, run2 = sj.load_kuka_lwr4(1), sj.load_kuka_lwr4(2)
     base = sj.base_parameters(kuka)
@@ -258,9 +254,7 @@ def population_speed() -> list[dict]:
     population in one vmapped call: compile (ahead of time) and run (median of 3,
     ``block_until_ready``) apart, the state by the sequential and by the associative
     scan (``sj.Presliding(scan=...)``)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        kuka = sj.robots.kuka_lwr4()
+    kuka = sj.robots.kuka_lwr4()
     run1 = sj.load_kuka_lwr4(1)
     base = sj.base_parameters(kuka)
     rows = []

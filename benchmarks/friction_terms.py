@@ -44,9 +44,7 @@ def main(argv=None) -> None:
     ap.add_argument("--json", default=None)
     args = ap.parse_args(argv)
     jax.config.update("jax_enable_x64", True)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the KUKA URDF's duplicate <origin>
-        robot = sj.robots.kuka_lwr4()
+    robot = sj.robots.kuka_lwr4()
     limits = joint_limits("kuka_lwr4", robot).torque_limits
     fit_data, held = sj.load_kuka_lwr4(1), sj.load_kuka_lwr4(2)
     base = sj.base_parameters(robot)

@@ -23,7 +23,6 @@ import json
 import os
 import platform
 import time
-import warnings
 from importlib import resources
 
 import jax
@@ -87,9 +86,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
     jax.config.update("jax_enable_x64", True)
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the URDF's duplicate <origin> note
-        robot = sj.robots.kuka_lwr4()
+    robot = sj.robots.kuka_lwr4()
     base = sj.base_parameters(robot)
     train = load(os.path.join(args.data, "measurements_1.npz"))
     test = load(os.path.join(args.data, "measurements_2.npz"))

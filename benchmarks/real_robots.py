@@ -53,9 +53,7 @@ SETTINGS = (DEFAULT, BY_SPEED, BY_PHASE, PREVIOUS, PLAIN)
 
 def datasets(tmp: Path):
     """(name, robot, measurements (joint side), limits, transmission, held-out runs)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the KUKA URDF's duplicate <origin>
-        kuka = sj.robots.kuka_lwr4()
+    kuka = sj.robots.kuka_lwr4()
     yield ("KUKA LWR4+", kuka, sj.load_kuka_lwr4(1), joint_limits("kuka_lwr4", kuka),
            None, {"run 2 (repeats run 1: repeatability)": sj.load_kuka_lwr4(2)})
     panda = sj.robots.franka_panda()

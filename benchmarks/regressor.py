@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import json
 import time
-import warnings
 from importlib import resources
 
 import jax
@@ -112,9 +111,7 @@ def main():
     rs = sj.robots.rs010n()
     rows.append(bench("RS010N", rs, pinocchio_rs010n(rs), args.samples, args.repeats, rng))
     path = resources.files("sedsabso_jax") / "data" / "kuka_lwr4" / "kuka_lwr4.urdf"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        kuka = sj.robots.from_urdf(str(path))
+    kuka = sj.robots.from_urdf(str(path))
     rows.append(bench("KUKA LWR4+", kuka, pin.buildModelFromUrdf(str(path)), args.samples,
                       args.repeats, rng))
     info = device_info()

@@ -28,7 +28,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     jax.config.update("jax_enable_x64", True)
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the KUKA URDF's duplicate <origin>; IA1, IA2
+        warnings.simplefilter("ignore")  # IA1, IA2
         robot = sj.robots.kuka_lwr4()
         limits = joint_limits("kuka_lwr4", robot).tau_max
         model = sj.TorqueModel.of(robot, MODEL)

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import time
-import warnings
 
 import jax
 import numpy as np
@@ -40,9 +39,7 @@ def main(argv=None):
     ap.add_argument("--json", default=None)
     args = ap.parse_args(argv)
     jax.config.update("jax_enable_x64", True)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        robot = sj.robots.kuka_lwr4()
+    robot = sj.robots.kuka_lwr4()
     data = sj.load_kuka_lwr4(1)
     limits = np.asarray(joint_limits("kuka_lwr4", robot).tau_max)
     model = sj.TorqueModel.of(robot, [sj.Offset()])

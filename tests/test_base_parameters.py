@@ -39,11 +39,7 @@ def test_rank_equals_pinocchio_rank_plus_friction(tmp_path, n, seed):
 
 
 def test_rank_of_the_kuka():
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        robot = sj.robots.kuka_lwr4()
+    robot = sj.robots.kuka_lwr4()
     from importlib import resources
 
     model = pin.buildModelFromUrdf(str(resources.files("sedsabso_jax") / "data" / "kuka_lwr4"

@@ -83,6 +83,7 @@ def _run(args, capsys):
     (["--algorithms", "LDWPSO,LDWPSO"], "named twice"),
     (["--algorithms", "PSO,evosax:PSO"], "named twice"),
     (["--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "not allowed with argument"),
+    (["--runs", "5"], "--runs 5 has no effect with --suite bbob, which runs once per instance"),
 ])
 def test_bad_input_exits_2_and_writes_nothing(tmp_path, capsys, args, message):
     out = tmp_path / "out"
@@ -91,6 +92,16 @@ def test_bad_input_exits_2_and_writes_nothing(tmp_path, capsys, args, message):
     code, _, err = _run(base + args, capsys)
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_runs_from_a_config_file_are_refused_with_bbob_too(tmp_path, capsys):
+    config, out = tmp_path / "cmp.toml", tmp_path / "out"
+    config.write_text("runs = 20\n")
+    code, _, err = _run(["--suite", "bbob", "--dimensions", "2", "--algorithms", "LDWPSO",
+                         "--functions", "1", "--instances", "1", "--config", str(config),
+                         "--out", str(out)], capsys)
+    assert code == 2 and "--runs 20 has no effect with --suite bbob" in err
+    assert len(err.strip().splitlines()) == 1 and not out.exists()
 
 
 def test_compare_writes_resumes_and_refuses_other_settings(small_campaign, tmp_path, capsys):

@@ -1,20 +1,26 @@
 """Campaigns on Dask distributed: two local worker processes, one of them killed while
 tasks run, give the serial campaign's numbers bit for bit (nothing lost, nothing counted
 twice); a restarted campaign runs only its unfinished tasks; an unreachable scheduler is
-one line and exit status 1 within 30 s with nothing written; without the flags Dask is
+one line and exit status 1 within 30 s with nothing written, and so is a server that is not
+a Dask scheduler (HTTP, random bytes) within the timeout and a margin; without the flags Dask is
 not imported, and without Dask the flags name the extra to install (without cocopp, a
 note names it)."""
 
 from __future__ import annotations
 
+import contextlib
+import http.server
 import json
 import os
 import shutil
 import signal
+import socket
 import subprocess
 import sys
+import threading
 import time
 
+import numpy as np
 import pytest
 from conftest import SMALL_CAMPAIGN
 
@@ -105,6 +111,95 @@ def test_unreachable_scheduler_is_one_line_and_status_1(tmp_path, capsys):
     assert code == 1 and time.perf_counter() - t0 < 30
     assert err.startswith("sedsabso-jax: error: cannot reach the Dask scheduler at "
                           "tcp://127.0.0.1:9 within 2 s") and err.count("\n") == 1
+    assert not out.exists()
+
+
+class _QuietHandler(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, *args) -> None:  # the test checks stderr: the server keeps quiet
+        pass
+
+
+@contextlib.contextmanager
+def _http_server():
+    """A plain HTTP server on the loopback; yields its port."""
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), _QuietHandler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        yield server.server_address[1]
+    finally:
+        server.shutdown()
+        server.server_close()
+
+
+@contextlib.contextmanager
+def _noise_server():
+    """A TCP server on the loopback that sends each connection 64 KiB of seeded random
+    bytes and keeps it open; yields its port."""
+    listener = socket.create_server(("127.0.0.1", 0))
+    noise, accepted = np.random.default_rng(0).bytes(1 << 16), []
+
+    def serve() -> None:
+        with contextlib.suppress(OSError):  # the listener closed: done
+            while True:
+                conn, _ = listener.accept()
+                accepted.append(conn)
+                with contextlib.suppress(OSError):
+                    conn.sendall(noise)
+
+    threading.Thread(target=serve, daemon=True).start()
+    try:
+        yield listener.getsockname()[1]
+    finally:
+        listener.close()
+        for conn in accepted:
+            conn.close()
+
+
+def _main_within(argv: list[str], limit: float) -> tuple[int, float]:
+    """``cli.main(argv)``'s exit status and seconds; a failure if it runs past ``limit``
+    (in a thread, so that a hang fails the test instead of stopping the suite)."""
+    done: list[int] = []
+    thread = threading.Thread(target=lambda: done.append(cli.main(argv)), daemon=True)
+    t0 = time.perf_counter()
+    thread.start()
+    thread.join(limit)
+    seconds = time.perf_counter() - t0
+    assert done, f"sedsabso-jax {' '.join(argv)} still ran after {limit:g} s"
+    return done[0], seconds
+
+
+@pytest.mark.parametrize("server", [_http_server, _noise_server], ids=["http", "random-bytes"])
+def test_a_server_that_is_not_a_scheduler_is_one_line_and_status_1(server, tmp_path, capsys):
+    pytest.importorskip("distributed")
+    out, timeout, margin = tmp_path / "none", 2, 8
+    with server() as port:
+        address = f"tcp://127.0.0.1:{port}"
+        code, seconds = _main_within([*SMALL_CAMPAIGN, "--functions", "1", "--scheduler",
+                                      address, "--scheduler-timeout", str(timeout), "--out",
+                                      str(out)], timeout + margin)
+    err = capsys.readouterr().err
+    assert code == 1, err
+    assert err.startswith(f"sedsabso-jax: error: cannot reach the Dask scheduler at {address} "
+                          f"within {timeout} s: ") and err.count("\n") == 1, err
+    assert not out.exists()
+
+
+def test_a_running_scheduler_passes_the_handshake_check():
+    distributed = pytest.importorskip("distributed")
+    from sedsabso_jax.compare import _dask
+
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as c:
+        _dask.check_scheduler(c.scheduler_address, 10)  # no error
+
+
+def test_a_malformed_scheduler_address_is_bad_input(tmp_path, capsys):
+    pytest.importorskip("distributed")
+    out = tmp_path / "none"
+    assert cli.main([*SMALL_CAMPAIGN, "--functions", "1", "--scheduler", "http://127.0.0.1:9",
+                     "--out", str(out)]) == 2
+    assert capsys.readouterr().err.startswith(
+        "sedsabso-jax: error: scheduler address 'http://127.0.0.1:9': unknown address scheme "
+        "'http'")
     assert not out.exists()
 
 

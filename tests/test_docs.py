@@ -17,6 +17,9 @@ public name is on an API page.
   (iterations, runs) and say what a real run would use.
 - Every ``sedsabso-jax ...`` command in a ```` ```bash ```` block of those pages parses
   with the command's own parser, so a renamed flag or subcommand fails here.
+- Numbers the pages quote from the package's output (:data:`QUOTED`) equal what produces
+  them, to the digits the page shows: the KUKA's default ``identify`` run once for the
+  module (about 40 s), or a ``print`` of the page whose output the examples' test checks.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ import ast
 import contextlib
 import importlib
 import io
+import json
 import linecache
 import os
 import re
@@ -266,3 +270,91 @@ def test_examples_run(path, tmp_path, monkeypatch):
     finally:
         plt.close("all")
         jax.config.update("jax_enable_x64", True)
+
+
+# ----------------------------------------------------------- the numbers the pages quote
+#: The KUKA's default identification on its two shipped runs, as the pages give it.
+KUKA_IDENTIFY = ("sedsabso-jax identify --robot kuka_lwr4 --data "
+                 "sedsabso_jax/data/kuka_lwr4/measurements_1.npz --validate "
+                 "sedsabso_jax/data/kuka_lwr4/measurements_2.npz")
+NUMBER = r"(\d+\.\d+)"
+#: Numbers quoted in the pages: (page under docs/, a pattern of the page's text with its
+#: line breaks read as spaces, its group the number, where the number comes from). From
+#: ``("kuka", key)``: the JSON report of :data:`KUKA_IDENTIFY` (``validation``: the held-out
+#: NRMS over the limits; ``score``: the error predicted for new motions); from
+#: ``("printed", text)``: the page's own ``print`` whose shown output starts with ``text``.
+QUOTED = [
+    ("explanation/identification-defaults.md",
+     rf"the default scores {NUMBER} % \(`{re.escape(KUKA_IDENTIFY)}`", ("kuka", "validation")),
+    ("results/real-robots.md", rf"the default scores \*\*{NUMBER} %\*\* "
+     rf"\(`{re.escape(KUKA_IDENTIFY)}`", ("kuka", "validation")),
+    ("results/real-robots.md", rf"The choices on all the data: the KUKA .{{0,100}}\(predicted "
+     rf"{NUMBER} %", ("kuka", "score")),
+    ("results/real-robots.md", rf"\(predicted \S+ %; its second run {NUMBER} %\)",
+     ("kuka", "validation")),
+    ("getting-started.md", rf"The same runs as shipped \(`--data` the `\.npz` files, with the "
+     rf"logger's accelerations instead of derived ones\) give {NUMBER} %", ("kuka", "validation")),
+    ("getting-started.md", rf"The held-out \*\*validation\*\* \({NUMBER} %\) is the check on "
+     r"`run2\.csv`", ("printed", "held-out NRMS over the limits")),
+    ("getting-started.md", rf"It chose the same model as step 3 \(held out {NUMBER} % over the "
+     r"limits\)", ("printed", "held-out NRMS over the limits")),
+    ("getting-started.md", rf"\*\*The predicted error on new motions\*\* \({NUMBER} % of the "
+     r"limits", ("printed", "predicted for new motions")),
+    ("getting-started.md", rf"validated error \(nrms_limits_percent\): {NUMBER} \+-",
+     ("printed", "predicted for new motions")),
+]
+
+
+@pytest.fixture(scope="module")
+def kuka_report(tmp_path_factory) -> dict:
+    """The JSON report of :data:`KUKA_IDENTIFY`, run from the repository root."""
+    from sedsabso_jax import cli
+
+    path = tmp_path_factory.mktemp("kuka") / "report.json"
+    argv = [*shlex.split(KUKA_IDENTIFY)[1:], "--out", str(path.parent), "--json", str(path)]
+    with contextlib.chdir(ROOT), contextlib.redirect_stdout(io.StringIO()):
+        assert cli.main(argv) == 0
+    return json.loads(path.read_text(encoding="utf-8"))
+
+
+def _printed(page: Path, text: str) -> str:
+    """The number after ``text`` in the output a ``print`` of ``page`` shows."""
+    shown = [expected for _, code, skipped in blocks(page, "python") if not skipped
+             for statement in ast.parse(code).body
+             if (expected := _expected(statement, code.splitlines())) is not None]
+    found = [m.group(1) for e in shown if (m := re.match(rf"{re.escape(text)} {NUMBER}", e))]
+    assert len(found) == 1, f"{page.name}: {len(found)} prints show {text!r}, expected one"
+    return found[0]
+
+
+@pytest.mark.parametrize("page, pattern, source", QUOTED,
+                         ids=[f"{p}:{s[1]}" for p, _, s in QUOTED])
+def test_quoted_numbers_are_what_produces_them(page, pattern, source, request):
+    text = " ".join((DOCS / page).read_text(encoding="utf-8").split())
+    quoted = re.findall(pattern, text)
+    assert len(quoted) == 1, f"{page}: {len(quoted)} places match {pattern!r}, expected one"
+    kind, key = source
+    if kind == "kuka":
+        report = request.getfixturevalue("kuka_report")
+        value = {"validation": report["validation"]["nrms_limits_percent"],
+                 "score": report["cross_validation"]["score"]}[key]
+    else:
+        value = float(_printed(DOCS / page, key))
+    digits = len(quoted[0].split(".")[1])
+    assert quoted[0] == f"{value:.{digits}f}", (
+        f"{page} quotes {quoted[0]} % where {key} is {value:.{digits}f} %")
+
+
+def test_the_compare_log_line_is_what_compare_writes():
+    """command-line.md's example of ``compare``'s line per task off a terminal."""
+    from sedsabso_jax.cli._compare import CompareProgress
+
+    page = DOCS / "how-to" / "command-line.md"
+    shown = [line for _, code, _ in blocks(page, "text") for line in code.splitlines()
+             if line.startswith("compare: ")]
+    assert len(shown) == 1, f"{page.name}: expected one example line of compare's log"
+    m = re.fullmatch(r"compare: (\d+)/(\d+) +(\d+) s (.+?)( ~\d+ min left)?", shown[0])
+    assert m, f"{page.name}: {shown[0]!r} is not a line of compare's log"
+    log = io.StringIO()
+    CompareProgress(log)(m.group(4), int(m.group(1)), int(m.group(2)), float(m.group(3)))
+    assert log.getvalue().rstrip("\n") == shown[0]

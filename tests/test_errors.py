@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from conftest import random_urdf
@@ -46,6 +48,24 @@ def test_truncated_kuka_urdf(tmp_path):
     text = (resources.files("sedsabso_jax") / "data/kuka_lwr4/kuka_lwr4.urdf").read_text()
     with pytest.raises(URDFError, match="not well-formed XML"):
         sj.robots.from_urdf(write(tmp_path, text[: len(text) // 2]))
+
+
+def test_the_shipped_urdfs_read_without_a_warning():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for robot in ("kuka_lwr4", "staubli_tx40"):
+            sj.robots.load(robot)
+            sj.dynamics.joint_limits(robot, sj.robots.load(robot))
+
+
+def test_a_repeated_element_is_warned_of_and_the_first_kept(tmp_path):
+    """A user's URDF that repeats an ``<origin>`` (as the KUKA file once did): the parser's
+    note as a warning; the first element counts, as in pinocchio (urdfdom)."""
+    text = ONE_JOINT.format(kind="revolute").replace(
+        "<axis", '<origin xyz="0 0 1"/><origin xyz="5 5 5"/><axis')
+    with pytest.warns(UserWarning, match="Scalar element defined multiple times: origin"):
+        robot = sj.robots.from_urdf(write(tmp_path, text))
+    np.testing.assert_array_equal(np.asarray(robot.T_fixed)[0, :3, 3], [0, 0, 1])
 
 
 def test_entities_are_refused_not_expanded(tmp_path):

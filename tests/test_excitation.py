@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import os
-import warnings
 from importlib import resources
 
 import jax
@@ -253,8 +252,7 @@ def test_bad_limits():
 
 
 def test_kuka_urdf_limits_are_the_files_numbers():
-    with resources.as_file(KUKA_URDF) as path, warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)  # the file repeats an <origin>
+    with resources.as_file(KUKA_URDF) as path:
         robot = sj.robots.kuka_lwr4()
         lim = joint_limits_from_urdf(path, robot, qdd_max=5.0)
     np.testing.assert_array_equal(lim.tau_max, [176, 176, 100, 100, 100, 38, 38])

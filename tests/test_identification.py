@@ -300,7 +300,6 @@ def test_bad_settings(rs010n, estimator, kwargs, match):
         identify(robot, None, estimator, **kwargs)
 
 
-@pytest.mark.filterwarnings("ignore:.*Scalar element defined multiple times")
 def test_a_torque_model_carries_its_own_settings(rs010n):
     robot, base = rs010n
     model = TorqueModel.of(robot, [Offset()], base=base)
@@ -470,9 +469,7 @@ def _kuka(run: int):
 
 def test_kuka_held_out():
     """Identify on measurements_1, validate on measurements_2 (FloBaRoID's split)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the URDF's duplicate <origin>
-        robot = sj.robots.kuka_lwr4()
+    robot = sj.robots.kuka_lwr4()
     base = sj.base_parameters(robot)
     train, test = _kuka(1), _kuka(2)
 

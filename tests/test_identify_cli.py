@@ -8,6 +8,7 @@ import pickle
 
 import numpy as np
 import pytest
+from conftest import random_urdf
 
 import sedsabso_jax as sj
 from sedsabso_jax import cli
@@ -34,6 +35,29 @@ def rs010n_files(tmp_path_factory):
         data = sj.simulate_measurements_along(robot, traj, times)
         paths.append(data.save(d / f"run{seed}.npz"))
     return [str(p) for p in paths]
+
+
+def test_revolute_joints_whose_limit_gives_no_range_are_unlimited(tmp_path, capsys):
+    """As a manufacturer's URDF (Kinova's Gen3) declares its unlimited joints: revolute,
+    with a ``<limit>`` of effort and velocity only. Read without position limits, with one
+    warning naming them (0.5 stopped: joint 1: q_min 0.0 must be below q_max 0.0)."""
+    rng = np.random.default_rng(5)
+    text, _ = random_urdf(rng, 2, prismatic_prob=0.0)
+    text = text.replace('<limit lower="-3" upper="3" effort="100" velocity="5"/>',
+                        '<limit effort="39" velocity="1.3963"/>')
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(text)
+    traj = sj.FourierTrajectory(rng.uniform(-0.5, 0.5, (2, 3)), rng.uniform(-0.5, 0.5, (2, 3)),
+                                np.zeros(2), wf=0.6)
+    data = sj.simulate_measurements_along(sj.robots.from_urdf(urdf), traj,
+                                          np.arange(400) / 40.0).save(tmp_path / "run.npz")
+    code = cli.main(["identify", "--robot", str(urdf), "--data", str(data), "--method", "OLS",
+                     "--friction", "viscous-coulomb", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert err.count(" have a <limit> without a position range") == 1, err
+    assert (f"sedsabso-jax: warning: URDF '{urdf}': joints ['j1', 'j2'] have a <limit> "
+            "without a position range") in err, err
 
 
 def test_rs010n_noise_free_recovers_the_true_parameters(rs010n_files, tmp_path, capsys):

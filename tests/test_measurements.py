@@ -86,7 +86,6 @@ def test_kuka_files(run):
 KUKA_LWR4_TORQUE_LIMITS = (176.0, 176.0, 100.0, 100.0, 100.0, 38.0, 38.0)
 
 
-@pytest.mark.filterwarnings("ignore:.*Scalar element defined multiple times")
 def test_torque_limits_match_the_urdf():
     root = ET.fromstring((DATA / "kuka_lwr4.urdf").read_text())
     efforts = [float(j.find("limit").get("effort")) for j in root.iter("joint")
@@ -97,7 +96,6 @@ def test_torque_limits_match_the_urdf():
     assert sj.JointLimits.rs010n().torque_limits is None  # Table 3 gives no efforts
 
 
-@pytest.mark.filterwarnings("ignore:.*Scalar element defined multiple times")
 def test_kuka_ols_held_out():
     """Plain least squares, identified on run 1, validated on run 2, recorded (unfiltered)
     positions, velocities and accelerations: 0.2156 % NRMS over the torque limits (the

@@ -4,7 +4,6 @@ URDFs and DH chains, and against closed forms."""
 from __future__ import annotations
 
 import os
-import warnings
 
 import numpy as np
 import pinocchio as pin
@@ -117,9 +116,7 @@ def test_two_link_planar_closed_form():
 
 
 def test_kuka_urdf_matches_pinocchio():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        robot = sj.robots.kuka_lwr4()
+    robot = sj.robots.kuka_lwr4()
     from importlib import resources
 
     path = resources.files("sedsabso_jax") / "data" / "kuka_lwr4" / "kuka_lwr4.urdf"

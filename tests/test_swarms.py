@@ -4,6 +4,7 @@ RS010N identification problem, bad input. Budgets are small; speed is benchmarke
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -228,6 +229,36 @@ def test_bad_input_fails_before_compiling(make, call, match):
     kwargs = {"lower": -np.ones(2), "upper": np.ones(2), "iterations": 10} | call
     with pytest.raises(ValueError, match=match):
         sj.minimise(sphere, make(), key=jax.random.key(0), **kwargs)
+
+
+@pytest.mark.parametrize("key, got", [
+    (0, "0"), (np.int64(7), "np.int64(7)"),
+    (np.zeros((2, 3)), "an array of dtype float64 and shape (2, 3)"),
+])
+def test_key_must_be_a_prng_key(key, got):
+    message = f"key must be a JAX PRNG key, e.g. jax.random.key(0), got {got}"
+    with pytest.raises(TypeError, match=f"^{re.escape(message)}$"):
+        sj.minimise(sphere, sj.LDWPSO(), -np.ones(2), np.ones(2), key=key, iterations=5)
+
+
+def test_raw_key_data_is_still_a_key():
+    kw = dict(lower=-np.ones(2), upper=np.ones(2), iterations=5)
+    typed = sj.minimise(sphere, sj.LDWPSO(), key=jax.random.key(3), **kw)
+    raw = sj.minimise(sphere, sj.LDWPSO(), key=jax.random.PRNGKey(3), **kw)
+    assert float(raw.f) == float(typed.f)
+
+
+@pytest.mark.parametrize("name", [*SOLVERS, "jit"])
+def test_a_fitness_must_return_a_scalar_per_point(name):
+    message = "the fitness must return a scalar per point, got shape (3,) for x of shape (3,)"
+
+    def call(key):
+        return sj.minimise(lambda x, a: x ** 2, SOLVERS.get(name, sj.LDWPSO()), -jnp.ones(3),
+                           jnp.ones(3), key=key, iterations=5, runs=2).f
+
+    with pytest.raises(ValueError) as err:
+        (jax.jit(call) if name == "jit" else call)(jax.random.key(0))
+    assert str(err.value) == message  # JAX's note on its filtered traceback aside
 
 
 def test_bounds_must_match_the_problem():

@@ -51,7 +51,6 @@ def test_inconsistent_parameters_are_refused():
         to_urdf(robot)
 
 
-@pytest.mark.filterwarnings("ignore:.*Scalar element defined multiple times")
 def test_identify_urdf_out(tmp_path, capsys):
     """`identify --physical --urdf-out`: pinocchio's torques of the written URDF are the
     fit's rigid-body and friction torques; the torque offsets, which a URDF cannot hold,

@@ -14,8 +14,7 @@ import sedsabso_jax as sj
 from sedsabso_jax import cli
 from sedsabso_jax.dynamics import update_urdf
 
-pytestmark = pytest.mark.filterwarnings("ignore:.*(Scalar element defined multiple times|"
-                                        "are off the chain)")
+pytestmark = pytest.mark.filterwarnings("ignore:.*are off the chain")
 
 
 def _perturbed(robot: sj.Robot) -> np.ndarray:

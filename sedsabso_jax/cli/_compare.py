@@ -41,10 +41,14 @@ def run(args: argparse.Namespace) -> None:
     def names(text: str) -> tuple[str, ...]:
         return tuple(v.strip() for v in text.split(",") if v.strip())
 
+    if args.runs is not None and args.suite == "bbob":
+        raise ValueError(f"--runs {args.runs} has no effect with --suite bbob, which runs once "
+                         "per instance: drop --runs, or name instances k times for k runs")
+    runs = {} if args.runs is None else {"runs": args.runs}  # else Settings' default
     settings = compare.Settings(suite=args.suite, algorithms=names(args.algorithms),
-                                runs=args.runs, budget=args.budget, seed=args.seed,
+                                budget=args.budget, seed=args.seed,
                                 functions=args.functions, dimensions=args.dimensions,
-                                instances=args.instances, dtype=args.dtype)
+                                instances=args.instances, dtype=args.dtype, **runs)
     settings.check()
     check_writable(args.out, None)
     t0 = time.perf_counter()
@@ -120,9 +124,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                             help="comma-separated: SEDSABSO, BSO, LDWPSO and evosax "
                             "strategies by evosax's names, e.g. CMA_ES, PSO, "
                             f"DifferentialEvolution ({','.join(DEFAULT_ALGORITHMS)})")
-    algorithms.add_argument("--runs", type=_common.positive_int, default=100,
+    # default None: --runs given with --suite bbob (on the command line or in --config)
+    # is refused, not ignored
+    algorithms.add_argument("--runs", type=_common.positive_int, default=None,
                             help="seeded runs per algorithm and identification problem "
-                            "(100); BBOB: one per instance")
+                            "(100); refused with --suite bbob, one run per instance")
     algorithms.add_argument("--budget", default=DEFAULT_BUDGET,
                             help="fitness evaluations per run: N, or Nd for N times the "
                             f"dimension ({DEFAULT_BUDGET})")
@@ -141,7 +147,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        "tcp://10.0.0.5:8786 (one dask-jobqueue starts)")
     execution.add_argument("--scheduler-timeout", type=_common.positive_float, default=20.0,
                            metavar="SECONDS",
-                           help="how long to try to reach the scheduler (20)")
+                           help="how long to try to reach the scheduler, Dask's handshake "
+                           "included (20)")
     outputs = cp.add_argument_group("outputs")
     outputs.add_argument("--out", default="compare-results",
                          help="directory for the report, figures, task files and COCO "

@@ -1,6 +1,7 @@
 """Tasks on Dask distributed: an embedded ``LocalCluster`` of worker processes on this
 machine (``--workers N``), or a running cluster (``--scheduler ADDRESS``; e.g. one that
-dask-jobqueue starts on SLURM). Imported only when one of them is asked for.
+dask-jobqueue starts on SLURM), which must answer Dask's handshake within the timeout
+(:func:`check_scheduler`). Imported only when one of them is asked for.
 
 Each task is one Dask task. Compiled code is kept per (algorithm, dimension): in each
 worker's memory (the driver's cache) and in JAX's persistent compilation cache, which
@@ -22,11 +23,13 @@ you start yourself should be given the same environment (dask-jobqueue:
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import shutil
 import tempfile
 import uuid
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 
 try:
     import distributed
@@ -69,6 +72,53 @@ def order(tasks: list[R.Task]) -> list[R.Task]:
     return first + [t for t in ordered if t not in first]
 
 
+def check_scheduler(address: str, timeout: float) -> None:
+    """Connect to ``address`` and exchange Dask's handshake, all within ``timeout``
+    seconds, or raise a RuntimeError of one line. ``distributed.Client(timeout=...)``
+    bounds only the connection: a server that is not a Dask scheduler (an HTTP server)
+    never answers the handshake and the client waits for ever; other bytes may be read
+    as huge frames (MemoryError). Runs in its own thread and event loop, so that it also
+    works under a caller's running loop (a notebook)."""
+    try:  # a malformed address is bad input (exit status 2), not an unreachable scheduler
+        scheme, location = distributed.comm.parse_address(address)
+        distributed.comm.registry.get_backend(scheme)
+        if scheme in ("tcp", "tls"):
+            distributed.comm.parse_host_port(location)
+    except ValueError as err:
+        raise ValueError(f"scheduler address {address!r}: {_first_line(err)}; expected e.g. "
+                         "tcp://10.0.0.5:8786") from None
+
+    async def handshake() -> None:
+        comm = await distributed.comm.connect(address, timeout=timeout)
+        await comm.close()
+
+    async def bounded() -> None:
+        await asyncio.wait_for(handshake(), timeout)
+
+    try:
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            pool.submit(asyncio.run, bounded()).result()
+    except TimeoutError:  # before OSError, which it is: no listener, or no handshake back
+        raise _unreachable(address, timeout, "no Dask scheduler answered (is one listening "
+                           "there?)") from None
+    except OSError as err:  # nothing listens, or the connection was closed
+        raise _unreachable(address, timeout, _first_line(err)) from None
+    except Exception as err:  # unreadable bytes: not a Dask scheduler
+        raise _unreachable(address, timeout, "its answer is not Dask's handshake "
+                           f"({type(err).__name__}: {_first_line(err)})") from None
+
+
+def _first_line(err: BaseException) -> str:
+    """The error's first line, else its type's name."""
+    text = str(err).strip()
+    return text.splitlines()[0] if text else type(err).__name__
+
+
+def _unreachable(address: str, timeout: float, why: str) -> RuntimeError:
+    return RuntimeError(f"cannot reach the Dask scheduler at {address} within {timeout:g} "
+                        f"s: {why}")
+
+
 class Executor:
     """A Dask client (and the LocalCluster it owns, if any) that runs tasks."""
 
@@ -82,13 +132,14 @@ class Executor:
                 n_workers=workers, threads_per_worker=1, processes=True,
                 dashboard_address=None, silence_logs=logging.ERROR, env=WORKER_ENV)
             self.client = distributed.Client(self.cluster)
+        elif scheduler is None:
+            raise ValueError("give workers or a scheduler's address")
         else:
+            check_scheduler(scheduler, timeout)
             try:
                 self.client = distributed.Client(scheduler, timeout=timeout)
             except (OSError, TimeoutError) as err:
-                first = str(err).strip().splitlines()[0] if str(err).strip() else type(err)
-                raise RuntimeError(f"cannot reach the Dask scheduler at {scheduler} within "
-                                   f"{timeout:g} s: {first}") from None
+                raise _unreachable(scheduler, timeout, _first_line(err)) from None
         cache = jax.config.jax_compilation_cache_dir  # type: ignore[attr-defined]
         if not cache and self.cluster is not None:
             cache = self.cache = tempfile.mkdtemp(prefix="sedsabso-jax-xla-")

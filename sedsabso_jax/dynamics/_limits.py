@@ -109,7 +109,8 @@ class JointLimits(eqx.Module):
 def joint_limits_from_urdf(path: PathLike, robot: Robot, *,
                           qdd_max: Float[ArrayLike, ""] | _PerJoint | None = None) -> JointLimits:
     """Limits of ``robot``'s joints from the ``<limit>`` tags of its URDF: ``lower,
-    upper`` (a continuous joint or one without ``<limit>``: unbounded), ``velocity``
+    upper`` (a continuous joint, one without ``<limit>`` or one whose ``<limit>`` has
+    neither ``lower`` nor ``upper``, or both 0: unbounded, with a warning), ``velocity``
     (missing or 0: unbounded) and ``effort`` as ``tau_max`` (missing or 0: nan). URDF has
     no acceleration limit: ``qdd_max`` (scalar or ``(n,)``) is taken from the argument,
     ``inf`` by default. The joints are found by ``robot.joint_names``."""

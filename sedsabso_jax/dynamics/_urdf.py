@@ -225,13 +225,16 @@ def joint_limit_rows(path: PathLike, joint_names: Sequence[str]) -> Float[np.nda
     """``<limit>`` of the named joints as rows ``(lower, upper, velocity, effort)``.
 
     A joint without ``<limit>`` (or a continuous joint, whose position limits URDF
-    ignores) has ``lower = -inf, upper = +inf``; a missing or zero velocity is ``+inf``
-    (unknown) and a missing or zero effort ``nan``.
+    ignores) has ``lower = -inf, upper = +inf``, and so has one whose ``<limit>`` gives no
+    range: ``lower`` and ``upper`` missing (URDF reads them as 0; some manufacturers'
+    files declare unlimited revolute joints so) or both 0 (exporters' placeholder), with
+    a warning naming those joints. A missing or zero velocity is ``+inf`` (unknown) and a
+    missing or zero effort ``nan``.
     """
     path = os.fspath(path)
     model = _parse(read_checked(path), path)
     joints = {j.name: j for j in model.joints}
-    rows = []
+    rows, no_range = [], []
     for name in joint_names:
         if name not in joints:
             raise URDFError(f"URDF {path!r} has no joint {name!r}; joints: {sorted(joints)}")
@@ -239,7 +242,9 @@ def joint_limit_rows(path: PathLike, joint_names: Sequence[str]) -> Float[np.nda
         lower = upper = velocity = effort = None
         if lim is not None:
             lower, upper, velocity, effort = lim.lower, lim.upper, lim.velocity, lim.effort
-        if lim is None or j.type == "continuous":
+        if lim is not None and j.type != "continuous" and not (lower or upper):
+            no_range.append(name)  # lower = upper = 0: no range, not a locked joint
+        if lim is None or j.type == "continuous" or name in no_range:
             lower = upper = None
         rows.append((
             -np.inf if lower is None else float(lower),
@@ -247,6 +252,10 @@ def joint_limit_rows(path: PathLike, joint_names: Sequence[str]) -> Float[np.nda
             float(velocity) if velocity else np.inf,
             float(effort) if effort else np.nan,
         ))
+    if no_range:
+        warnings.warn(f"URDF {path!r}: joints {no_range} have a <limit> without a position "
+                      "range (lower and upper missing or both 0); read without position "
+                      "limits, as continuous joints", stacklevel=3)
     return np.array(rows, dtype=float).reshape(len(rows), 4)
 
 

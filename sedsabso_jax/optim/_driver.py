@@ -206,7 +206,21 @@ def run_bytes(solver: AbstractSolver, fitness: Fitness, dim: int, dtype: DTypeLi
     return int(flight), int(iterations * (itemsize + 4) + 4 * dim * itemsize)
 
 
-def _check_common(fitness, solver, iterations, runs, args, dtype):
+def check_key(key: Any) -> None:
+    """A typed PRNG key (``jax.random.key``) or raw key data (``jax.random.PRNGKey``, a
+    uint32 array); anything else (``key=0``) is a TypeError saying what to pass."""
+    dtype = getattr(key, "dtype", None)
+    if isinstance(key, (jax.Array, np.ndarray)) and dtype is not None and (
+            jax.dtypes.issubdtype(dtype, jax.dtypes.prng_key)
+            or (dtype == np.uint32 and np.ndim(key) >= 1)):
+        return
+    got = (repr(key) if dtype is None or np.ndim(key) == 0 else
+           f"an array of dtype {dtype} and shape {tuple(np.shape(key))}")
+    raise TypeError(f"key must be a JAX PRNG key, e.g. jax.random.key(0), got {got}")
+
+
+def _check_common(fitness, solver, key, iterations, runs, args, dtype):
+    check_key(key)
     if not isinstance(solver, AbstractSolver):
         raise TypeError(f"solver must be an optimiser of the solver contract (SEDSABSO, "
                         f"BSO, LDWPSO, an Evosax strategy or another AbstractSolver), got "
@@ -228,7 +242,7 @@ def _cast_all(dtype, *trees):
 def _prepare(fitness, solver, lower, upper, key, iterations, runs, args, dtype, batch):
     """Check everything and build the compiled function, its configuration and its
     arguments (nothing runs)."""
-    fitness, dtype = _check_common(fitness, solver, iterations, runs, args, dtype)
+    fitness, dtype = _check_common(fitness, solver, key, iterations, runs, args, dtype)
     lower, upper = check_bounds(lower, upper, fitness.dim)
     lo, hi = jnp.asarray(lower, dtype), jnp.asarray(upper, dtype)
     dyn, static = eqx.partition(solver, eqx.is_array)
@@ -277,7 +291,7 @@ def _traced(fitness, solver, lower, upper, key, iterations, runs, args, dtype, b
     """:func:`minimise` inside a caller's transformation: the same runs, traced. The box's
     values may be traced: ``lower < upper`` is checked when the program runs
     (``equinox.error_if``)."""
-    fitness, dtype = _check_common(fitness, solver, iterations, runs, args, dtype)
+    fitness, dtype = _check_common(fitness, solver, key, iterations, runs, args, dtype)
     lo, hi = jnp.asarray(lower, dtype), jnp.asarray(upper, dtype)
     dim = fitness.dim
     if lo.ndim != 1 or hi.shape != lo.shape or (dim is not None and lo.shape[0] != dim):
@@ -334,13 +348,15 @@ def minimise(fitness: FitnessLike, solver: AbstractSolver, lower: Float[ArrayLik
     Args:
         fitness: a callable ``f(x, args) -> scalar`` (optimistix's convention: ``x`` a 1-D
             array, ``args`` whatever ``args`` below holds; evaluated under ``vmap``; a
-            fitness of one argument is refused before anything is traced), a
+            fitness of one argument is refused before anything is traced, one that
+            returns more than a scalar per point while it is traced), a
             :class:`~sedsabso_jax.BlackBox` or an :class:`~sedsabso_jax.L1Residual` (the
             paper's Eq. 17, evaluated through ``W x``).
         solver: the optimiser and its hyperparameters.
         lower: the box's lower corner, a 1-D array.
         upper: its upper corner, of the same length.
-        key: a JAX PRNG key (``jax.random.key(seed)``); the same key gives the same result.
+        key: a JAX PRNG key (``jax.random.key(seed)``, or ``jax.random.PRNGKey``'s raw
+            data); the same key gives the same result. An integer is refused (TypeError).
         iterations: iterations (generations) per run.
         runs: that many independent runs in one call (keys split from ``key``), with a
             leading ``runs`` axis on every array of the result; None: one run, no axis.

@@ -111,7 +111,11 @@ class BlackBox(AbstractFitness):
 
     def value(self, E: Float[Array, "*batch d"]) -> Float[Array, "*batch"]:
         flat = E.reshape((-1, E.shape[-1]))
-        return jax.vmap(lambda x: self.fn(x, self.args))(flat).reshape(E.shape[:-1])
+        f = jnp.asarray(jax.vmap(lambda x: self.fn(x, self.args))(flat))
+        if f.size != flat.shape[0]:  # checked while tracing, before anything runs
+            raise ValueError(f"the fitness must return a scalar per point, got shape "
+                             f"{tuple(f.shape[1:])} for x of shape {tuple(flat.shape[1:])}")
+        return f.reshape(E.shape[:-1])
 
     def __call__(self, x: Float[Array, " d"]) -> Float[Array, ""]:
         return self.fn(x, self.args)
