@@ -94,8 +94,8 @@ class Names:
 
 class Choice(eqx.Module):
     """How :func:`~sedsabso_jax.select_and_identify` chooses, with the rules between its
-    options stated once and checked when built (a one-line ValueError naming the options as ``names``
-    spells them): the command line builds one from its flags before it loads any data.
+    options stated once and checked when built (a one-line ValueError naming the options
+    as ``names`` spells them): the command line builds one from its flags before it loads any data.
 
     ``validation``: what chooses (a :class:`~sedsabso_jax.Validation`, a
     :class:`DefaultValidation`, or None: nothing is validated, one candidate is fitted);

@@ -4,8 +4,8 @@ it returns (:class:`EstimatorFit`), the one row weighting (:func:`weigh`), and t
 
 An estimator is an immutable ``equinox.Module`` carrying only its own options, converted
 and checked when it is built, with one :meth:`~Estimator.fit` method (the modules of
-:mod:`~sedsabso_jax.identification._estimators` have them all). A final class that sets ``registered_as =
-{"NAME": {}}`` is known by that name to the command line's ``--method`` and to
+:mod:`~sedsabso_jax.identification._estimators` have them all). A final class that sets
+``registered_as = {"NAME": {}}`` is known by that name to the command line's ``--method`` and to
 :meth:`Estimator.named`: writing the class is all it takes to add one.
 """
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations

@@ -16,7 +16,8 @@ on none of their kinds:
    L1, a box search: any), through the normal equations where the samples are a
    validation's subset and the estimator reads only them; again, with the values each
    fit gives, while a term reads every fit's values (a fixed point,
-   :attr:`~sedsabso_jax.identification.AbstractTerm.iterates`), until its columns change by less than :data:`SETTLE_RTOL`.
+   :attr:`~sedsabso_jax.identification.AbstractTerm.iterates`), until its columns
+   change by less than :data:`SETTLE_RTOL`.
 
 :func:`fit` returns the model as fitted (its parameters found, the values its terms
 read) with the estimator's fit and a report of the stages.
