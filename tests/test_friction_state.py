@@ -179,6 +179,22 @@ def test_the_search_problem_is_the_least_squares_fit(plant, friction):
     np.testing.assert_allclose(J[:, 1], fd, atol=1e-5 * np.abs(fd).max())
 
 
+def test_a_search_is_kept_per_row_weights(plant):
+    """A validation fits each split with several estimators: their searches are one where
+    the search weighs the rows alike (OLS, Gautier's WLS: equal), another where it weighs
+    them otherwise (WLS by the limits)."""
+    from sedsabso_jax.identification._fit._fit import fit
+
+    robot, base, data, _ = plant
+    samples = Samples(data.q, data.qd, data.qdd, data.tau)
+    model = sj.TorqueModel.of(robot, (sj.Presliding(fitted=True),), base=base)
+    limits = np.array([500.0, 200.0, 10.0])
+    ols, wls, by_limits = (fit(e, model, samples, limits) for e in (
+        sj.OLS(), sj.WLS(), sj.WLS("limits")))
+    assert ols.report["searched"] is wls.report["searched"]
+    assert by_limits.report["searched"]["loss"] != ols.report["searched"]["loss"]
+
+
 def test_the_word_and_the_command(tmp_path, capsys, plant):
     from sedsabso_jax.cli import main
 
