@@ -44,6 +44,20 @@ class TwoMinima(eqx.Module):
         return jnp.mean(self.residual(u) ** 2)
 
 
+class Asymmetric(eqx.Module):
+    """A convex kink at ``centre``, ten times steeper on its left: the best point of a
+    grid can lie more than half a step from the minimum."""
+
+    centre: jax.Array
+
+    def loss(self, u):
+        d = u - self.centre
+        return jnp.sum(jnp.where(d > 0, d, -10.0 * d))
+
+    def residual(self, u):
+        return jnp.sqrt(self.loss(u))[None]
+
+
 LOWER, UPPER = np.full(3, -4.0), np.full(3, 4.0)
 METHODS = [CoordinateSearch(), PopulationSearch(sj.LDWPSO(), evaluations=2000),
            PopulationSearch(sj.Evosax("CMA_ES"), evaluations=2000), LeastSquaresSearch()]
@@ -77,6 +91,29 @@ def test_the_global_searches_pass_a_local_minimum():
     assert local.u[0] < 0 and local.loss > 0.1
     for method in METHODS:
         assert method.search(problem, start, lower, upper).loss <= f_start
+
+
+def test_the_coordinate_grid_keeps_the_minimum_inside():
+    """A kink at 0.1 (first grid: -4, -3, ..., 4, whose best point is 1, 0.9 away): each
+    later grid spans a step either side of the best, so the minimum stays inside and is
+    found to the last grid's step."""
+    problem = Asymmetric(jnp.full(3, 0.1))
+    found = CoordinateSearch().search(problem, np.zeros(3), LOWER, UPPER)
+    np.testing.assert_allclose(found.u, 0.1, atol=0.02)
+
+
+def test_a_search_from_the_minimum_stays_there():
+    """Nothing a search tries from the minimum (here off every grid) is better: the
+    coordinate search returns the start itself (a sweep keeps no move that raises the
+    loss), the others a point as good."""
+    centre = np.array([-0.7, 0.3, 1.7])
+    problem = Bowl(jnp.asarray(centre))
+    for method in METHODS:
+        found = method.search(problem, centre, LOWER, UPPER)
+        assert found.loss <= 1e-12, method
+    kink = Asymmetric(jnp.asarray(centre))  # a minimum no parabola finds exactly
+    np.testing.assert_array_equal(CoordinateSearch().search(kink, centre, LOWER, UPPER).u,
+                                  centre)
 
 
 @pytest.mark.parametrize("make, match", [
