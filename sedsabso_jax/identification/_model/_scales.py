@@ -100,7 +100,8 @@ class AbstractScale(AbstractTerm):
 
     def with_nonlinear(self, values: Any) -> AbstractTerm:
         if isinstance(values, jax.core.Tracer):  # a trial inside a compiled search
-            return eqx.tree_at(lambda t: getattr(t, t.scale_name), self, values)
+            name = self.scale_name
+            return eqx.tree_at(lambda t: getattr(t, name), self, values)
         scale = {self.scale_name: tuple(float(v) for v in np.asarray(values))}
         return dataclasses.replace(self, **scale)  # type: ignore[arg-type]
 
