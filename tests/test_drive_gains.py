@@ -88,7 +88,8 @@ def test_a_known_centre_of_mass_is_held(rs010n):
     assert found.settings["com"] == pytest.approx(COM.tolist())
 
 
-def test_motor_currents_through_a_coupled_transmission(rs010n):
+@pytest.mark.parametrize("method", sj.identification.GAIN_METHODS)
+def test_motor_currents_through_a_coupled_transmission(rs010n, method):
     """Currents per motor behind gear ratios and a coupling: the motors' gains."""
     robot, motion, plant, _, _ = rs010n
     K = np.array([[50.0, 0, 0], [0, -80.0, 0], [0, 30.0, 40.0]])
@@ -98,7 +99,7 @@ def test_motor_currents_through_a_coupled_transmission(rs010n):
         tau = _currents(robot, params, motion, np.ones(3), seed=seed)
         motor = np.linalg.solve(K.T, tau.tau.T).T  # tau = K^T tau_motor
         runs.append(sj.Measurements(tau.times, tau.q, tau.qd, tau.qdd, motor / motor_gains))
-    found = sj.identify_drive_gains(robot, *runs, "link3", MASS, transmission=K,
+    found = sj.identify_drive_gains(robot, *runs, "link3", MASS, transmission=K, method=method,
                                     model=sj.TorqueModel.of(robot, sj.Offset()))
     np.testing.assert_allclose(found.gains, motor_gains, rtol=1e-8)
     assert found.motor_side and found.as_dict()["motor_side"]
@@ -110,8 +111,8 @@ def test_motor_currents_through_a_coupled_transmission(rs010n):
 def test_noisy_currents_bias_least_squares_not_the_likelihood():
     """1 % noise in the currents: ordinary least squares pulls some gain toward zero by
     more than 5 of its standard deviations (errors in variables); the maximum likelihood
-    stays within 4 of its own on every joint (measured 2.2 at most), and its standard
-    deviations are finite and small."""
+    stays within 4 of its own on every joint (measured 2.2 at most), its standard
+    deviations are finite and small, and its weights are the currents' noise."""
     robot = sj.robots.rs010n()
     motion = _motion(3, 1200, 60.0, seed=2)
     plant, _ = _plant(robot, 2)
@@ -126,6 +127,11 @@ def test_noisy_currents_bias_least_squares_not_the_likelihood():
     assert z["ordinary"].max() > 5, z
     assert z["likelihood"].max() < 4, z
     assert np.all(found["likelihood"].relative_std < 0.02)
+    # its weights: each current's noise (1 % of the joint's RMS torque over its gain)
+    clean = _currents(robot, plant, motion, GAINS)
+    noise = 0.01 * np.sqrt(np.mean((clean.tau * GAINS) ** 2, axis=0)) / GAINS
+    np.testing.assert_allclose(found["likelihood"].settings["solution"]["current_sigma"],
+                               noise, rtol=0.1)
 
 
 def test_a_joint_the_data_cannot_calibrate_is_reported(rs010n):

@@ -40,10 +40,10 @@ from ._estimators._estimator import FitProblem as FitProblem
 from ._estimators._estimator import weigh as weigh
 from ._estimators._least_squares import AbstractLeastSquares as AbstractLeastSquares
 from ._fit._fit import SETTLE_RTOL as SETTLE_RTOL
-from ._gains._result import CALIBRATED_STD as CALIBRATED_STD
-from ._gains._solvers import GAIN_METHODS as GAIN_METHODS
 from ._fit._fit import Fitted as Fitted
 from ._fit._projection import Projection as Projection
+from ._gains._result import CALIBRATED_STD as CALIBRATED_STD
+from ._gains._solvers import GAIN_METHODS as GAIN_METHODS
 from ._metrics import nrms_over_limits as nrms_over_limits
 from ._model._candidates import FRICTION_CANDIDATES as FRICTION_CANDIDATES
 from ._model._candidates import candidate_models as candidate_models

@@ -168,7 +168,8 @@ def identify_drive_gains(robot: Robot, unloaded: Data, loaded: Data, link: str, 
     base_model = TorqueModel.of(robot, (Offset(), LoadFriction()), transmission=transmission) \
         if model is None else model_of(robot, model)
     base_model.check_recordings(len(recordings))
-    term = PayloadInertia(k, T, tuple(range(len(unloaded_recs), len(recordings))))
+    term = PayloadInertia(k, tuple(float(v) for v in np.reshape(T, -1)),
+                          tuple(range(len(unloaded_recs), len(recordings))))
     full = with_payload(base_model, term)
     signals = stacked(recordings)
     _excited(equations(full.without_waiting(), signals, motors, mass, r), link)
@@ -215,5 +216,6 @@ def _result(eq: GainEquations, sol: Solution, signals: tuple, motors: np.ndarray
                       f"{100 * CALIBRATED_STD:g} %): the payload's torque barely reaches "
                       f"{'them' if plural else 'it'}; record faster motions of "
                       f"{'those' if plural else 'that'} {label}{plural} with the payload, "
-                      f"give the centre of mass (com=, --com), or give the gain{plural}", stacklevel=caller_stacklevel())
+                      f"give the centre of mass (com=, --com), or give the gain{plural}",
+                      stacklevel=caller_stacklevel())
     return found
