@@ -91,12 +91,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "(--loaded, --mass, --link; --com when its centre of mass is known) (Gautier & "
         "Briot 2014). The torque columns of the files hold the currents. It prints each "
         "gain with its standard deviation and whether the data calibrate it, and writes "
-        "--json, which 'identify' and 'identify-payload' read with --drive-gains FILE.json. "
+        "--json, which 'identify' and 'identify-payload' read with --drive-gains FILE.json "
+        "(sedsabso-jax identify --robot R --data currents.npz --drive-gains gains.json). "
         "Files as for 'identify'; flags may also come from a --config file.",
         examples=["sedsabso-jax identify-gains --robot kuka_lwr4 --data currents.npz "
                   "--loaded weighed.npz --link lwr_7_link --mass 3.02 --json gains.json",
-                  "sedsabso-jax identify --robot kuka_lwr4 --data currents.npz "
-                  "--drive-gains gains.json"])
+                  "sedsabso-jax identify-gains --robot arm.urdf --data a.csv --loaded b.csv "
+                  "--link tool0 --mass 2.5 --com 0,0,0.04 --friction offset+load+presliding"])
     inp = pp.add_argument_group("input", "the robot, its data, and how the data are loaded")
     files.add_robot(inp)
     inp.add_argument("--data", metavar="FILE", nargs="+", required=True,

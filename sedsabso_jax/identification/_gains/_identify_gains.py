@@ -41,6 +41,7 @@ from .._payload._least_squares import LinearFit
 from .._payload._term import PayloadInertia, payload_frame
 from .._recordings import Data, recordings_of, stacked
 from ._equations import GainEquations, equations, payload_columns, with_payload
+from ._lstsq import lstsq
 from ._result import CALIBRATED_STD, DriveGains
 from ._solvers import GAIN_METHODS, Solution, solve
 
@@ -114,7 +115,8 @@ def _fitted(model: TorqueModel, signals: tuple, motors: np.ndarray, mass: float,
     if model.waiting:
         first_model = model.without_waiting()
         first_eq = equations(first_model, signals, motors, mass, com)
-        values, _ = first_eq.split(solve(first_eq, "ordinary").theta)
+        X, b = first_eq.rows  # ordinary least squares, as identify's first stage
+        values, _ = first_eq.split(lstsq(X.reshape(-1, X.shape[-1]), b.reshape(-1)))
         by_name = dict(zip(first_model.names, values))
         model = model.reading(np.array([by_name.get(n, 0.0) for n in model.names]),
                               only=lambda term: term.waiting)

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._payload._least_squares import LinearFit
+from ._lstsq import lstsq
 from ._equations import GainEquations
 
 #: Gauss-Newton stops when no gain moves by more than this fraction of itself.
@@ -77,7 +77,7 @@ class Likelihood:
         loss = float(np.sum(self.residual(x, h, s) ** 2))
         for step in range(1, STEPS + 1):
             r = self.residual(x, h, s)
-            delta = LinearFit.of(self.jacobian(x, h, s), -r).x
+            delta = lstsq(self.jacobian(x, h, s), -r)
             t = 1.0
             while t > 1e-6:
                 nx, nh = x + t * delta[:self.p], h + t * delta[self.p:]

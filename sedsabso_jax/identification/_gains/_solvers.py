@@ -2,7 +2,7 @@
 
 Each joint's rows are divided by its sigma, Gautier's two-step estimate (the RMS of the
 joint's residual after an unweighted fit, then once more after the fit so weighted;
-:func:`~.._payload._least_squares.joint_sigma`). On the weighted rows ``W theta ~ b``:
+:func:`~._lstsq.gautier_sigma`). On the weighted rows ``W theta ~ b``:
 
 - ``"ordinary"``: least squares (minimum norm, columns scaled to unit norm). The currents
   are in the gains' columns: an errors-in-variables fit, whose gains the currents' noise
@@ -33,10 +33,10 @@ import numpy as np
 
 from ...dynamics._inertia import pseudo_inertia
 from .._estimators._physical import PSD_MARGIN, RIDGE
-from .._fit._uncertainty import RANK_TOLERANCE
-from .._payload._least_squares import LinearFit, joint_sigma, pseudo_inertia_map
+from .._payload._least_squares import LinearFit, pseudo_inertia_map
 from ._equations import GainEquations, payload_columns
 from ._likelihood import gain_map, maximum_likelihood
+from ._lstsq import eigen, gautier_sigma, lstsq
 
 #: The ways to solve the equations (module docstring).
 GAIN_METHODS = ("ordinary", "total", "likelihood", "physical")
@@ -59,26 +59,26 @@ class Solution:
 def weighted(eq: GainEquations) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(W, b, sigma)``: the rows divided by each joint's sigma (module docstring)."""
     X, b = eq.rows
-    sigma = joint_sigma(X, b, "residual")
+    sigma = gautier_sigma(X, b)
     return (X / sigma[:, None]).reshape(-1, X.shape[-1]), (b / sigma).reshape(-1), sigma
 
 
 def total(W: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Total least squares of ``W theta ~ b`` (module docstring), on the columns scaled to
     unit norm and, where ``W`` is rank deficient, on the combinations of them it
-    determines (the others are left at 0, as the minimum-norm least squares leaves them)."""
-    norms = np.linalg.norm(W, axis=0)
-    scale = np.where(norms > RANK_TOLERANCE * norms.max(initial=0.0), norms, np.inf)
-    _, s, Vt = np.linalg.svd(W / scale, full_matrices=False)
-    rank = int(np.sum(s > RANK_TOLERANCE * s[0])) if s.size and s[0] > 0 else 0
-    basis = Vt[:rank].T  # the determined combinations of the scaled columns
-    Z = np.column_stack([(W / scale) @ basis, -b])
+    determines (the others are left at 0, as the minimum-norm least squares leaves them):
+    the eigenvector of the smallest eigenvalue of ``[W, -b]``'s scaled Gram matrix."""
+    scale, lam, V, rank = eigen(W)
+    basis = V[:, :rank]  # the determined combinations of the scaled columns
+    Wb = (W / scale) @ basis
+    Z = np.column_stack([Wb, -b])
     z_norms = np.linalg.norm(Z, axis=0)
-    unit = np.linalg.svd(Z / z_norms, full_matrices=False)[2][-1]
-    v = unit / z_norms
+    Zs = Z / z_norms
+    unit = np.linalg.eigh(Zs.T @ Zs)[1][:, 0]
     if not abs(unit[-1]) > 1e-8:
         raise ValueError("total least squares: the smallest singular vector leaves out the "
                          "known payload: the payload's mass does not fix the scale")
+    v = unit / z_norms
     return (basis @ (v[:-1] / v[-1])) / scale
 
 
@@ -138,7 +138,7 @@ def solve(eq: GainEquations, method: str) -> Solution:
     identity = np.eye(W.shape[1])
     report: dict = {"sigma": sigma.tolist()}
     if method == "ordinary":
-        theta = LinearFit.of(W, b).x
+        theta = lstsq(W, b)
         return Solution(theta, W, W @ theta - b, identity, report)
     theta = total(W, b)
     if method == "total":
