@@ -13,9 +13,10 @@ each motor's current the torque over its gain, ``e_m`` Gaussian of standard devi
 ``s_m``. The maximum-likelihood estimate minimises ``sum_m |r_m|^2 / s_m^2`` with ``r_m =
 h_m (K^-T (Y x + k))_m - c_m`` (``k`` the known payload's torque), bilinear in ``(x, h)``:
 Gauss-Newton on both from the total least squares' estimate, each step a least squares
-of the Jacobian (``dr/dx = h_m (K^-T Y)_m``, ``dr/dh_m = (K^-T (Y x + k))_m``), halved
-while it does not lower the loss; ``s_m`` is the RMS of each motor's residual, estimated
-at the start and once more at the first optimum (as Gautier's two-step weights). It is
+of the Jacobian (``dr/dx = h_m (K^-T Y)_m``, ``dr/dh_m = (K^-T (Y x + k))_m``) on the
+motors' compressed rows (:mod:`._compressed`), halved while it does not lower the
+loss; ``s_m`` is the RMS of each motor's residual, estimated at the start and once more
+at the first optimum (as Gautier's two-step weights). It is
 the structured total least squares of the equations (Markovsky & Van Huffel, Signal
 Processing 87(10), 2007): a current's error perturbs its own gain's column only.
 """
@@ -24,7 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._lstsq import lstsq
+from .._payload._least_squares import LinearFit
+from ._compressed import compress
 from ._equations import GainEquations
 
 #: Gauss-Newton stops when no gain moves by more than this fraction of itself.
@@ -35,40 +37,45 @@ STEPS = 50
 
 class Likelihood:
     """The residual and Jacobian of the maximum-likelihood problem of ``eq`` (module
-    docstring), in current units over each motor's ``s``."""
+    docstring), in current units over each motor's ``s``, on each motor's rows ``[K^-T Y,
+    K^-T k, c]`` compressed once (:mod:`._compressed`): for ``v_m = [h_m x; h_m; -1]``
+    the motor's residual is ``R_m v_m / s_m``."""
 
     def __init__(self, eq: GainEquations):
         inverse = np.linalg.inv(eq.motors.T)  # g * c = K^-T tau
-        self.Y = np.einsum("mj,tjd->tmd", inverse, eq.A[..., eq.free])
-        self.k = eq.known_torque @ inverse.T
-        self.c = eq.current
-        self.p = eq.free.size
+        Y = np.einsum("mj,tjd->tmd", inverse, eq.A[..., eq.free])
+        k = eq.known_torque @ inverse.T
+        self.p, self.samples = eq.free.size, Y.shape[0]
+        self.acting = np.count_nonzero(np.any(Y != 0, axis=0), axis=-1) + 1
+        self.R = compress(np.concatenate([Y, k[..., None], eq.current[..., None]], -1))
 
-    def torque(self, x: np.ndarray) -> np.ndarray:
-        """Each motor's torque ``K^-T (Y x + k)``, ``(T, m)``."""
-        return self.Y @ x + self.k
+    def _coefficients(self, x: np.ndarray, h: np.ndarray) -> np.ndarray:
+        return np.concatenate([h[:, None] * x, h[:, None], -np.ones((h.size, 1))], -1)
 
     def residual(self, x: np.ndarray, h: np.ndarray, s: np.ndarray) -> np.ndarray:
-        return ((h * self.torque(x) - self.c) / s).reshape(-1)
+        v = self._coefficients(x, h)
+        return (np.einsum("mij,mj->mi", self.R, v) / s[:, None]).reshape(-1)
 
     def jacobian(self, x: np.ndarray, h: np.ndarray, s: np.ndarray) -> np.ndarray:
-        """``(T m, p + m)``: the residual's derivatives by ``x`` and ``h``."""
-        T, m = self.c.shape
-        Jx = self.Y * (h / s)[None, :, None]
-        Jh = np.zeros((T, m, m))
-        Jh[:, np.arange(m), np.arange(m)] = self.torque(x) / s
-        return np.concatenate([Jx, Jh], -1).reshape(T * m, -1)
+        """The residual's derivatives by ``x`` and ``h``, ``(m (p + 2), p + m)``."""
+        m, p = h.size, self.p
+        D = np.zeros((m, p + 2, p + m))  # dv_m / d(x, h)
+        D[:, np.arange(p), np.arange(p)] = h[:, None]
+        D[np.arange(m), :p, p + np.arange(m)] = x
+        D[np.arange(m), p, p + np.arange(m)] = 1.0
+        return (np.einsum("mij,mjk->mik", self.R, D) / s[:, None, None]).reshape(-1, p + m)
 
     def rows(self, h: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The least squares in ``x`` at the gains ``1 / h``: ``(W, b)``."""
-        W = self.Y * (h / s)[None, :, None]
-        return W.reshape(-1, self.p), ((self.c - h * self.k) / s).reshape(-1)
+        p = self.p
+        W = self.R[..., :p] * (h / s)[:, None, None]
+        b = (self.R[..., p + 1] - h[:, None] * self.R[..., p]) / s[:, None]
+        return W.reshape(-1, p), b.reshape(-1)
 
     def spread(self, x: np.ndarray, h: np.ndarray) -> np.ndarray:
         """Each motor's residual RMS over its samples less the unknowns acting on it."""
-        r = h * self.torque(x) - self.c
-        acting = np.count_nonzero(np.any(self.Y != 0, axis=0), axis=-1) + 1
-        s = np.sqrt(np.sum(r ** 2, axis=0) / np.maximum(r.shape[0] - acting, 1))
+        r2 = np.sum(np.einsum("mij,mj->mi", self.R, self._coefficients(x, h)) ** 2, -1)
+        s = np.sqrt(r2 / np.maximum(self.samples - self.acting, 1))
         return np.where(s > 0, s, max(float(s.max()), 1e-300))
 
     def optimum(self, x: np.ndarray, h: np.ndarray, s: np.ndarray
@@ -77,7 +84,7 @@ class Likelihood:
         loss = float(np.sum(self.residual(x, h, s) ** 2))
         for step in range(1, STEPS + 1):
             r = self.residual(x, h, s)
-            delta = lstsq(self.jacobian(x, h, s), -r)
+            delta = LinearFit.of(self.jacobian(x, h, s), -r).x
             t = 1.0
             while t > 1e-6:
                 nx, nh = x + t * delta[:self.p], h + t * delta[self.p:]

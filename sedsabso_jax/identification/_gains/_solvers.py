@@ -2,7 +2,7 @@
 
 Each joint's rows are divided by its sigma, Gautier's two-step estimate (the RMS of the
 joint's residual after an unweighted fit, then once more after the fit so weighted;
-:func:`~._lstsq.gautier_sigma`). On the weighted rows ``W theta ~ b``:
+compressed once, :mod:`._compressed`). On the weighted rows ``W theta ~ b``:
 
 - ``"ordinary"``: least squares (minimum norm, columns scaled to unit norm). The currents
   are in the gains' columns: an errors-in-variables fit, whose gains the currents' noise
@@ -21,7 +21,7 @@ joint's residual after an unweighted fit, then once more after the fit so weight
   programme, Clarabel through cvxpy).
 
 The standard deviations are those of the least squares (or of the likelihood's
-linearisation) at the returned estimate (:func:`~.._fit._uncertainty.function_std`).
+linearisation) at the returned estimate (:func:`~._compressed.std`).
 """
 
 from __future__ import annotations
@@ -33,10 +33,11 @@ import numpy as np
 
 from ...dynamics._inertia import pseudo_inertia
 from .._estimators._physical import PSD_MARGIN, RIDGE
+from .._fit._uncertainty import RANK_TOLERANCE
 from .._payload._least_squares import LinearFit, pseudo_inertia_map
+from ._compressed import compress
 from ._equations import GainEquations, payload_columns
 from ._likelihood import gain_map, maximum_likelihood
-from ._lstsq import eigen, gautier_sigma, lstsq
 
 #: The ways to solve the equations (module docstring).
 GAIN_METHODS = ("ordinary", "total", "likelihood", "physical")
@@ -45,36 +46,59 @@ GAIN_METHODS = ("ordinary", "total", "likelihood", "physical")
 @dataclasses.dataclass(frozen=True, eq=False)
 class Solution:
     """The unknowns ``theta`` (the free model values, then the gains), and for their
-    standard deviations the weighted rows' Jacobian ``W`` and ``residual`` with ``G``, the
-    derivatives of ``theta`` by ``W``'s unknowns (:func:`~.._fit._uncertainty.function_std`);
-    the solver's ``report``."""
+    standard deviations the weighted rows' Jacobian ``W`` and ``residual``, compressed
+    (:mod:`._compressed`), the ``rows`` they stand for, and ``G``, the derivatives of
+    ``theta`` by ``W``'s unknowns; the solver's ``report``."""
 
     theta: np.ndarray
     W: np.ndarray
     residual: np.ndarray
+    rows: int
     G: np.ndarray
     report: dict
 
 
-def weighted(eq: GainEquations) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(W, b, sigma)``: the rows divided by each joint's sigma (module docstring)."""
+def compressed_rows(eq: GainEquations) -> tuple[np.ndarray, int, np.ndarray]:
+    """``(R, T, acting)``: each joint's rows ``[X, b]`` (:attr:`GainEquations.rows`)
+    compressed, the samples, and the unknowns acting on each joint."""
     X, b = eq.rows
-    sigma = gautier_sigma(X, b)
-    return (X / sigma[:, None]).reshape(-1, X.shape[-1]), (b / sigma).reshape(-1), sigma
+    acting = np.count_nonzero(np.any(X != 0, axis=0), axis=-1)
+    return compress(np.concatenate([X, b[..., None]], -1)), X.shape[0], acting
+
+
+def weighted(R: np.ndarray, sigma: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The compressed rows ``R`` divided by each joint's ``sigma``: ``(W, b)``."""
+    u = R.shape[-1] - 1
+    return ((R[..., :u] / sigma[:, None, None]).reshape(-1, u),
+            (R[..., u] / sigma[:, None]).reshape(-1))
+
+
+def gautier(R: np.ndarray, T: int, acting: np.ndarray) -> np.ndarray:
+    """Each joint's sigma, Gautier's two-step estimate (module docstring)."""
+    u = R.shape[-1] - 1
+    sigma = np.ones(R.shape[0])
+    for _ in range(2):
+        x = LinearFit.of(*weighted(R, sigma)).x
+        r2 = np.sum((R[..., :u] @ x - R[..., u]) ** 2, axis=-1)
+        sigma = np.sqrt(r2 / np.maximum(T - acting, 1))
+        sigma = np.where(sigma > 0, sigma, max(float(sigma.max()), 1e-300))
+    return sigma
 
 
 def total(W: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Total least squares of ``W theta ~ b`` (module docstring), on the columns scaled to
     unit norm and, where ``W`` is rank deficient, on the combinations of them it
-    determines (the others are left at 0, as the minimum-norm least squares leaves them):
-    the eigenvector of the smallest eigenvalue of ``[W, -b]``'s scaled Gram matrix."""
-    scale, lam, V, rank = eigen(W)
-    basis = V[:, :rank]  # the determined combinations of the scaled columns
-    Wb = (W / scale) @ basis
-    Z = np.column_stack([Wb, -b])
-    z_norms = np.linalg.norm(Z, axis=0)
-    Zs = Z / z_norms
-    unit = np.linalg.eigh(Zs.T @ Zs)[1][:, 0]
+    determines (the others are left at 0, as the minimum-norm least squares leaves them)."""
+    norms = np.linalg.norm(W, axis=0)
+    scale = np.where(norms > RANK_TOLERANCE * norms.max(initial=0.0), norms, np.inf)
+    _, sv, Vt = np.linalg.svd(W / scale, full_matrices=False)
+    rank = int(np.sum(sv > RANK_TOLERANCE * sv[0])) if sv.size and sv[0] > 0 else 0
+    basis = Vt[:rank].T  # the determined combinations of the scaled columns
+    # in an orthonormal basis of what they determine the scaled columns' perturbations
+    # keep their norm; b scaled to unit norm
+    z_norms = np.r_[np.ones(rank), max(float(np.linalg.norm(b)), 1e-300)]
+    Zs = np.column_stack([(W / scale) @ basis, -b]) / z_norms
+    unit = np.linalg.svd(Zs, full_matrices=False)[2][-1]
     if not abs(unit[-1]) > 1e-8:
         raise ValueError("total least squares: the smallest singular vector leaves out the "
                          "known payload: the payload's mass does not fix the scale")
@@ -134,19 +158,22 @@ def solve(eq: GainEquations, method: str) -> Solution:
     """The equations ``eq`` solved by ``method`` (one of :data:`GAIN_METHODS`)."""
     if method not in GAIN_METHODS:
         raise ValueError(f"method must be one of {GAIN_METHODS}, got {method!r}")
-    W, b, sigma = weighted(eq)
+    R, T, acting = compressed_rows(eq)
+    sigma = gautier(R, T, acting)
+    W, b = weighted(R, sigma)
     identity = np.eye(W.shape[1])
+    rows = T * R.shape[0]
     report: dict = {"sigma": sigma.tolist()}
     if method == "ordinary":
-        theta = lstsq(W, b)
-        return Solution(theta, W, W @ theta - b, identity, report)
+        theta = LinearFit.of(W, b).x
+        return Solution(theta, W, W @ theta - b, rows, identity, report)
     theta = total(W, b)
     if method == "total":
-        return Solution(theta, W, W @ theta - b, identity, report)
+        return Solution(theta, W, W @ theta - b, rows, identity, report)
     problem, x, h, s, found = maximum_likelihood(eq, theta)
     report = {**report, **found}
     if method == "physical":
         x, solved = physical(eq, LinearFit.of(*problem.rows(h, s)))
         report["solver"] = solved
     return Solution(np.r_[x, 1.0 / h], problem.jacobian(x, h, s), problem.residual(x, h, s),
-                    gain_map(x.size, h), report)
+                    problem.samples * h.size, gain_map(x.size, h), report)
