@@ -101,10 +101,12 @@ def _excited(eq: GainEquations, link: str) -> None:
                          f"the arm does not move)")
 
 
-def _fitted(model: TorqueModel, signals: tuple, motors: np.ndarray, mass: float,
-            com: np.ndarray | None, method: str) -> tuple[GainEquations, Solution, dict]:
-    """The model's terms completed as :func:`~sedsabso_jax.identify` completes them, then
-    the equations solved by ``method``."""
+def _fitted(model: TorqueModel, first_eq: GainEquations, signals: tuple, motors: np.ndarray,
+            mass: float, com: np.ndarray | None, method: str
+            ) -> tuple[GainEquations, Solution, dict]:
+    """The model's terms completed as :func:`~sedsabso_jax.identify` completes them
+    (``first_eq``: the equations of the model without the terms that wait for fitted
+    values), then the equations solved by ``method``."""
     report: dict = {}
     if model.nonlinear():
         raise ValueError(f"drive gains: the torque model {model.friction!r} has parameters "
@@ -112,18 +114,17 @@ def _fitted(model: TorqueModel, signals: tuple, motors: np.ndarray, mass: float,
     if model.iterates:
         raise ValueError("drive gains: load:fixed-point is not supported; use load (two "
                          "stages)")
-    if model.waiting:
-        first_model = model.without_waiting()
-        first_eq = equations(first_model, signals, motors, mass, com)
-        # the first stage by the method itself: ordinary least squares (identify's first
-        # stage) would read the load off values its biased gains distort (the KUKA's
-        # wrist gains 1-2 % off in the simulation study, against 0.1-0.4 %)
-        first = solve(first_eq, "likelihood" if method == "physical" else method)
-        values, _ = first_eq.split(first.theta)
-        by_name = dict(zip(first_model.names, values))
-        model = model.reading(np.array([by_name.get(n, 0.0) for n in model.names]),
-                              only=lambda term: term.waiting)
-        report["stages"] = 2
+    if not model.waiting:
+        return first_eq, solve(first_eq, method), report
+    # the first stage by the method itself: ordinary least squares (identify's first
+    # stage) would read the load off values its biased gains distort (the KUKA's wrist
+    # gains 1-2 % off in the simulation study, against 0.1-0.4 %)
+    first = solve(first_eq, "likelihood" if method == "physical" else method)
+    values, _ = first_eq.split(first.theta)
+    by_name = dict(zip(first_eq.model.names, values))
+    model = model.reading(np.array([by_name.get(n, 0.0) for n in model.names]),
+                          only=lambda term: term.waiting)
+    report["stages"] = 2
     eq = equations(model, signals, motors, mass, com)
     return eq, solve(eq, method), report
 
@@ -177,8 +178,9 @@ def identify_drive_gains(robot: Robot, unloaded: Data, loaded: Data, link: str, 
                           tuple(range(len(unloaded_recs), len(recordings))))
     full = with_payload(base_model, term)
     signals = stacked(recordings)
-    _excited(equations(full.without_waiting(), signals, motors, mass, r), link)
-    eq, sol, report = _fitted(full, signals, motors, mass, r, method)
+    first_eq = equations(full.without_waiting(), signals, motors, mass, r)
+    _excited(first_eq, link)
+    eq, sol, report = _fitted(full, first_eq, signals, motors, mass, r, method)
     return _result(eq, sol, signals, motors, {
         "link": link, "moving_link": robot.link_names[k], "mass": mass,
         "com": None if r is None else r.tolist(), "friction": base_model.friction,
