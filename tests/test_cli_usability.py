@@ -118,7 +118,7 @@ def _failing(error: BaseException):
 ], ids=["runtime", "memory", "unexpected", "interrupt", "value"])
 def test_failures_while_running_are_status_1(error, status, message, data_file, monkeypatch,
                                               capsys):
-    from sedsabso_jax.identification import _auto
+    from sedsabso_jax.identification._default import _select_and_identify as _auto
 
     monkeypatch.setattr(_auto, "select_and_identify", _failing(error))
     assert cli.main(["identify", "--robot", "rs010n", "--data", data_file]) == status
@@ -127,7 +127,7 @@ def test_failures_while_running_are_status_1(error, status, message, data_file, 
 
 def test_solver_failure_is_status_1(data_file, monkeypatch, capsys):
     cvxpy = pytest.importorskip("cvxpy")
-    from sedsabso_jax.identification import _auto
+    from sedsabso_jax.identification._default import _select_and_identify as _auto
 
     monkeypatch.setattr(_auto, "select_and_identify", _failing(cvxpy.error.SolverError("x")))
     assert cli.main(["identify", "--robot", "rs010n", "--data", data_file]) == 1
@@ -139,7 +139,7 @@ def test_each_warning_once(data_file, monkeypatch, capsys):
     another message is another line."""
     import warnings
 
-    from sedsabso_jax.identification import _auto
+    from sedsabso_jax.identification._default import _select_and_identify as _auto
 
     def warns(*args, **kwargs):  # from two places, as the robot and its limits read a URDF
         warnings.warn("URDF 'a.urdf': origin twice", stacklevel=1)

@@ -9,8 +9,11 @@ line's word."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
+from typing import ClassVar
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -144,7 +147,46 @@ def _least_squares_loss(Y, tau, w):
     return np.mean((W @ x - b) ** 2)
 
 
-@pytest.mark.parametrize("friction", ["presliding:fit", "offset+smooth:fit+stribeck:0.05"])
+class SharedDrag(sj.identification.AbstractScale):
+    """A term of the test's own: one column reaching every joint's row, ``sum_j
+    tanh(qd_j / v)`` on each (a drag the joints share), its ``v`` searched."""
+
+    velocity: float | tuple[float, ...] = 0.05
+    fitted: bool = True
+    name: ClassVar[str] = "shared"
+    nonnegative: ClassVar[bool] = False
+    bounds: ClassVar[tuple[float, float]] = (1e-3, 1.0)
+    scale_name: ClassVar[str] = "velocity"
+    scale_unit: ClassVar[str] = "rad/s"
+    default_scale: ClassVar[float] = 0.05
+    symbol: ClassVar[str] = "v_shared"
+
+    def names(self, model):
+        return ("DRAG",)
+
+    def nonlinear(self, model):  # one velocity for the joints together
+        found = super().nonlinear(model)
+        return sj.identification.Nonlinear(found.names[:1], found.values[:1],
+                                           found.lower[:1], found.upper[:1], found.unit)
+
+    def with_nonlinear(self, values):
+        if isinstance(values, jax.core.Tracer):  # a trial inside the compiled search
+            return eqx.tree_at(lambda t: t.velocity, self, values[0])
+        return dataclasses.replace(self, velocity=float(values[0]))
+
+    def columns(self, model, s):
+        xp = s.xp
+        return xp.sum(xp.tanh(s.qd / self.per_joint(model.robot.n_joints, xp)), -1,
+                      keepdims=True)[..., None, :] * xp.ones((model.robot.n_joints, 1))
+
+
+MODELS = {"presliding:fit": lambda: parse_friction("presliding:fit"),
+          "offset+smooth:fit+stribeck:0.05": lambda: parse_friction(
+              "offset+smooth:fit+stribeck:0.05"),
+          "a column on every row": lambda: (SharedDrag(),)}
+
+
+@pytest.mark.parametrize("friction", list(MODELS))
 def test_the_search_problem_is_the_least_squares_fit(plant, friction):
     """The compiled problem's loss at log-parameters u is the mean square residual of a
     plain least-squares fit of the model with those parameters (weighted per joint), on
@@ -155,10 +197,11 @@ def test_the_search_problem_is_the_least_squares_fit(plant, friction):
     columns and the Stribeck columns that read it, alike."""
     robot, base, data, _ = plant
     samples = Samples(data.q, data.qd, data.qdd, data.tau)
-    model = sj.TorqueModel.of(robot, parse_friction(friction), base=base)
+    model = sj.TorqueModel.of(robot, MODELS[friction](), base=base)
     w = np.array([1.0, 2.0, 0.5])
     problem = Projection.of(model, samples, w)
-    u = np.log(np.array([0.015, 0.03, 0.02]))
+    k = sum(len(f.values) for _, f in model.nonlinear())
+    u = np.log(np.array([0.015, 0.03, 0.02]))[:k]
     Y = samples.rows(model.with_nonlinear(np.exp(u)), every_column=True)
     assert float(problem.loss(jnp.asarray(u))) == pytest.approx(
         _least_squares_loss(Y, data.tau, w), rel=1e-7)
@@ -166,7 +209,7 @@ def test_the_search_problem_is_the_least_squares_fit(plant, friction):
     part = Projection.of(model, samples.subset(keep), w)
     assert float(part.loss(jnp.asarray(u))) == pytest.approx(
         _least_squares_loss(Y[keep], data.tau[keep], w), rel=1e-7)
-    population = jnp.asarray(u + np.random.default_rng(0).normal(0, 0.5, (5, 3)))
+    population = jnp.asarray(u + np.random.default_rng(0).normal(0, 0.5, (5, k)))
     np.testing.assert_allclose(jax.vmap(problem.loss)(population),
                                [problem.loss(p) for p in population], rtol=1e-9)
     r = problem.residual(jnp.asarray(u))
@@ -174,9 +217,26 @@ def test_the_search_problem_is_the_least_squares_fit(plant, friction):
                                                     rel=1e-7)
     J = jax.jacfwd(problem.residual)(jnp.asarray(u))
     h = 1e-5
-    fd = (problem.residual(jnp.asarray(u + h * np.eye(3)[1]))
-          - problem.residual(jnp.asarray(u - h * np.eye(3)[1]))) / (2 * h)
-    np.testing.assert_allclose(J[:, 1], fd, atol=1e-5 * np.abs(fd).max())
+    e = np.eye(k)[k - 1]
+    fd = (problem.residual(jnp.asarray(u + h * e)) - problem.residual(jnp.asarray(u - h * e))
+          ) / (2 * h)
+    np.testing.assert_allclose(J[:, k - 1], fd, atol=1e-5 * np.abs(fd).max())
+
+
+def test_a_search_is_kept_per_row_weights(plant):
+    """A validation fits each split with several estimators: their searches are one where
+    the search weighs the rows alike (OLS, Gautier's WLS: equal), another where it weighs
+    them otherwise (WLS by the limits)."""
+    from sedsabso_jax.identification._fit._fit import fit
+
+    robot, base, data, _ = plant
+    samples = Samples(data.q, data.qd, data.qdd, data.tau)
+    model = sj.TorqueModel.of(robot, (sj.Presliding(fitted=True),), base=base)
+    limits = np.array([500.0, 200.0, 10.0])
+    ols, wls, by_limits = (fit(e, model, samples, limits) for e in (
+        sj.OLS(), sj.WLS(), sj.WLS("limits")))
+    assert ols.report["searched"] is wls.report["searched"]
+    assert by_limits.report["searched"]["loss"] != ols.report["searched"]["loss"]
 
 
 def test_the_word_and_the_command(tmp_path, capsys, plant):

@@ -315,7 +315,7 @@ def test_a_torque_model_carries_its_own_settings(rs010n):
                                                 "'viscous-coulomb\\+offset\\+offset'$"),
                          ((CoupledMotorFriction(),), "^friction term 'coupling' needs a "
                                                      "transmission with a motor that turns"),
-                         (("offset",), r"^terms must be a tuple of terms")]:
+                         (("offset",), r"^terms must be terms \(Offset\(\), Quadratic")]:
         with pytest.raises((ValueError, TypeError), match=match):
             TorqueModel.of(robot, terms, base=base)
     with pytest.raises(ValueError, match=r"^one torque offset per recording needs the "
@@ -356,13 +356,16 @@ def test_bad_data(rs010n):
         identify(robot, (z, z, z, np.zeros((19, 3))), OLS(), plain)
     with pytest.raises(ValueError, match="no samples"):
         identify(robot, (np.zeros((0, 3)),) * 4, OLS(), plain)
-    with pytest.raises(ValueError, match=r"data must be a Measurements or a tuple \(q, qd, "
-                                         r"qdd, tau\) of arrays, got ndarray"):
+    with pytest.raises(ValueError, match=r"data must be a Measurements, several, or one "
+                                         r"recording's arrays \(q, qd, qdd, tau\) or \(times, "
+                                         r"q, qd, qdd, tau\), got ndarray"):
         identify(robot, z, OLS(), plain)
     with pytest.raises(TypeError, match="robot must be"):
         identify("robot", (z, z, z, z))
     with pytest.raises(ValueError, match="base must be"):
         TorqueModel.of(robot, base="base")
+    with pytest.raises(ValueError, match=r"got a tuple of 3$"):
+        identify(robot, (z, z, z), OLS(), plain)
 
 
 # ------------------------------------------------- each estimator against a closed form
@@ -550,7 +553,9 @@ def test_offsets_per_recording(rs010n, rng):
 def test_parse_friction_reads_the_command_lines_text(rs010n):
     assert parse_friction("viscous-coulomb") == ()
     assert parse_friction("quadratic+viscous-coulomb+offset") == (Offset(), Quadratic())
-    assert parse_friction("offset+smooth+offset") == (Offset(), SmoothCoulomb())
+    with pytest.raises(ValueError, match=r"^friction term 'offset' is given twice in "
+                                         r"'offset\+smooth\+offset': each term once$"):
+        parse_friction("offset+smooth+offset")  # 0.5 dropped the second one silently
     assert parse_friction("coupling+armature") == (Armature(), CoupledMotorFriction())
     for text, match in [("viscous-coulomb+glue", r"^unknown friction term\(s\) \['glue'\]; "
                          r"known: \('viscous-coulomb', 'offset', 'quadratic', 'smooth', "

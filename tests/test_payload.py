@@ -197,6 +197,19 @@ def test_consistent_estimate_kept_else_projected(rs010n_runs):
     assert np.linalg.eigvalsh(pseudo_inertia(noisy.params10)).min() > 0
 
 
+def test_a_fit_that_constrains_the_links_keeps_the_payload_a_body(rs010n_runs):
+    """``PhysicallyConsistent(WLS())`` constrains the links and the payload (a body term)
+    alike: the payload's pseudo-inertia stays positive semidefinite where the
+    unconstrained estimate's is not, and the links' full parameters come back."""
+    robot, _, runs = rs010n_runs
+    unloaded, loaded = runs(1, noise=0.05)
+    p = sj.identify_payload(robot, loaded, "link3", unloaded=unloaded,
+                            estimator=sj.PhysicallyConsistent(sj.WLS()))
+    assert np.linalg.eigvalsh(pseudo_inertia(p.unconstrained10)).min() < 0
+    assert np.linalg.eigvalsh(pseudo_inertia(p.params10)).min() > 0
+    assert p.identification.full_params is not None
+
+
 @pytest.mark.parametrize("robot_name,link", [("rs010n", "link1"), ("rs010n", "link2"),
                                               ("kuka_lwr4", "lwr_2_link")])
 def test_a_mass_the_joints_cannot_feel_is_refused(robot_name, link):

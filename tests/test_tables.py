@@ -15,8 +15,8 @@ import pytest
 import sedsabso_jax as sj
 from sedsabso_jax._output import columns_note, markdown_table
 from sedsabso_jax.compare._report import render
-from sedsabso_jax.identification._validation._cross_validation import CrossValidation
 from sedsabso_jax.identification._default._report import IdentificationReport
+from sedsabso_jax.identification._validation._cross_validation import CrossValidation
 from sedsabso_jax.identification._validation._selection import PriorSelection, Selection
 from sedsabso_jax.reproduce._report import base_parameter_table, table4, table5
 

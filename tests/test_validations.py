@@ -13,8 +13,8 @@ import pytest
 import sedsabso_jax as sj
 from sedsabso_jax import cli
 from sedsabso_jax.identification import FitProblem
-from sedsabso_jax.identification._fit._samples import Samples
 from sedsabso_jax.identification._estimators._physical import _programme
+from sedsabso_jax.identification._fit._samples import Samples
 
 
 def _status(argv) -> int:

@@ -100,9 +100,9 @@ def run(args: argparse.Namespace) -> None:
     from ..dynamics._limits import joint_limits
     from ..identification._default._choice import estimator_candidates
     from ..identification._default._select_and_identify import select_and_identify
-    from ..identification._recordings import recordings_of
     from ..identification._model._candidates import FRICTION_CANDIDATES, candidate_models
     from ..identification._model._order import parse_friction
+    from ..identification._recordings import recordings_of
 
     check_writable(args.out, args.json, args.urdf_out)
     if args.urdf_out is not None and args.physical is False:

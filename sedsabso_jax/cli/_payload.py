@@ -19,9 +19,9 @@ def run(args: argparse.Namespace) -> None:
     from .._output import write_json
     from ..dynamics import _robots as robots
     from ..identification._estimators._least_squares import OLS, WLS, PhysicallyConsistent
+    from ..identification._model._order import parse_friction
     from ..identification._model._torque_model import TorqueModel
     from ..identification._payload._identify_payload import identify_payload
-    from ..identification._model._order import parse_friction
 
     check_writable(None, args.json)
     terms = parse_friction(args.friction)
@@ -37,9 +37,9 @@ def run(args: argparse.Namespace) -> None:
     if unloaded:
         count = len(loaded) + len(unloaded) if args.offset_per_recording else 1
         model = TorqueModel.of(robot, terms, transmission=transmission, recordings=count)
-    estimator = WLS() if args.weights == "residual" else OLS()
-    if args.physical:
-        estimator = PhysicallyConsistent(estimator, links=False)
+    least_squares = WLS() if args.weights == "residual" else OLS()
+    estimator = (PhysicallyConsistent(least_squares, links=False) if args.physical
+                 else least_squares)
     with files.urdf_source(args.robot) as urdf:
         payload = identify_payload(robot, loaded, args.link, unloaded=unloaded or None,
                                    estimator=estimator, model=model, urdf=urdf)

@@ -15,8 +15,9 @@ import dataclasses
 import math
 import re
 import zlib
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
+import equinox as eqx
 import jax
 import numpy as np
 
@@ -45,29 +46,38 @@ TARGETS = {"bbob": COCO_TARGETS, "identification": 10.0 ** np.linspace(0, -8, 41
 CHECKPOINTS = 24
 
 
-@dataclasses.dataclass(frozen=True)
-class Settings:
+def _canonical_names(value: Iterable[str]) -> tuple[str, ...]:
+    """The algorithms' names as given, files under the bare evosax name."""
+    return tuple(canonical(a) for a in value)
+
+
+def _numbers(name: str) -> Callable[[object], object]:
+    """The converter of a list of numbers: text (``"1-5,7"``) parsed, a sequence as a
+    tuple, anything else as given."""
+    def convert(value: object) -> object:
+        if isinstance(value, str):
+            return _bbob.parse_numbers(value, name)
+        return tuple(value) if isinstance(value, Iterable) else value
+    return convert
+
+
+class Settings(eqx.Module):
     """What a comparison runs: the suite, the algorithms, and per task the budget and the
     runs (all of it lands in every task file that it decides)."""
 
     suite: str = "all"
-    algorithms: tuple[str, ...] = DEFAULT_ALGORITHMS
+    algorithms: tuple[str, ...] = eqx.field(default=DEFAULT_ALGORITHMS,
+                                            converter=_canonical_names)
     runs: int = 100  # per identification problem; BBOB: one per instance
     budget: str = DEFAULT_BUDGET  # evaluations: "N" in all, or "Nd": N times the dimension
     seed: int = 0
-    functions: tuple[int, ...] = tuple(range(1, len(_bbob.FUNCTIONS) + 1))
-    dimensions: tuple[int, ...] = _bbob.DIMENSIONS
-    instances: tuple[int, ...] = _bbob.DEFAULT_INSTANCES  # COCO's numbers, a run each
+    functions: tuple[int, ...] = eqx.field(
+        default=tuple(range(1, len(_bbob.FUNCTIONS) + 1)), converter=_numbers("functions"))
+    dimensions: tuple[int, ...] = eqx.field(default=_bbob.DIMENSIONS,
+                                            converter=_numbers("dimensions"))
+    instances: tuple[int, ...] = eqx.field(default=_bbob.DEFAULT_INSTANCES,
+                                           converter=_numbers("instances"))
     dtype: str = "float64"
-
-    def __post_init__(self) -> None:  # names as given, files under the bare evosax name
-        object.__setattr__(self, "algorithms", tuple(canonical(a) for a in self.algorithms))
-        for name in ("functions", "dimensions", "instances"):
-            value = getattr(self, name)
-            if isinstance(value, str):
-                object.__setattr__(self, name, _bbob.parse_numbers(value, name))
-            elif isinstance(value, Iterable):
-                object.__setattr__(self, name, tuple(value))
 
     def evaluations(self, dim: int) -> int:
         """The budget in fitness evaluations for a problem of dimension ``dim``."""

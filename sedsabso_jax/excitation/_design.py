@@ -256,10 +256,11 @@ def design_excitation(robot: Robot, limits: JointLimits, *, n_harmonics: int = D
     The experiment samples ``times = arange(round(duration * rate)) / rate``. ``search``
     (:class:`DesignSearch`): the swarm and its iterations, and the design grid: the swarm's
     condition number is taken at ``search.design_samples`` equally spaced times over
-    ``[0, duration)``, the limits at as many over one period with :func:`sampling_margin`,
-    so the design meets them at every time; ``ExcitationDesign.cond`` is recomputed at
-    ``times``. The search box is :func:`coefficient_box`. ``key``: a JAX PRNG key or an
-    int seed (default 0), the same key giving the same design; ``base``: the robot's base
+    ``[0, duration)``, the limits at as many over one period with
+    :func:`~._fitness.sampling_margin`, so the design meets them at every time;
+    ``ExcitationDesign.cond`` is recomputed at ``times``. The search box is
+    :func:`coefficient_box`. ``key``: a JAX PRNG key or an int seed (default 0), the same
+    key giving the same design; ``base``: the robot's base
     parameters when already computed; ``memory_budget``: bytes the random baseline's
     batches and the final condition number may take at once on an accelerator (at least
     1 MB; see :func:`random_batch`); the CPU keeps its small cache-sized batches. Raises

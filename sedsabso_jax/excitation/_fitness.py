@@ -149,7 +149,7 @@ class DesignProblem(eqx.Module):
 
 
 def design_fitness(x: Float[Array, " d"], problem: DesignProblem) -> Float[Array, ""]:
-    """Eq. 9 at coefficients ``x`` (:meth:`FourierTrajectory.to_vector` order):
+    """Eq. 9 at coefficients ``x`` (:meth:`~sedsabso_jax.FourierTrajectory.to_vector` order):
     ``cond(W_b)`` at the design times, plus :data:`PENALTY` if a limit is violated at the
     check times (and, with ``problem.graded``, ``PENALTY`` times the summed relative excess
     over the limits)."""

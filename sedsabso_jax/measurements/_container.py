@@ -14,11 +14,11 @@ does not exist is a FileNotFoundError.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import equinox as eqx
 import numpy as np
 from jaxtyping import ArrayLike
 
@@ -109,8 +109,7 @@ def check_fields(source: str, fields: Mapping[str, Any], n_joints: int | None = 
     return out  # type: ignore[return-value]  # velocities, accelerations may be None
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
-class Measurements:
+class Measurements(eqx.Module):
     """Joint measurements along one trajectory (numpy, float64, read-only).
 
     Attributes:
@@ -129,22 +128,23 @@ class Measurements:
     qdd: np.ndarray
     tau: np.ndarray
     source: str = "arrays"
-    info: dict = dataclasses.field(default_factory=dict)
+    info: dict = eqx.field(default_factory=dict)
 
-    def __post_init__(self):
-        source = str(self.source)
-        checked = check_fields(source, {
-            "times": self.times, "positions": self.q, "velocities": self.qd,
-            "accelerations": self.qdd, "torques": self.tau,
-        })
+    def __init__(self, times: ArrayLike, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
+                 tau: ArrayLike, source: str = "arrays", info: dict | None = None):
+        source = str(source)
+        checked = check_fields(source, {"times": times, "positions": q, "velocities": qd,
+                                        "accelerations": qdd, "torques": tau})
+        arrays = {}
         for field, attr in (("times", "times"), *ATTRIBUTES.items()):
             arr = checked[field]
             if arr is None:
                 raise ValueError(f"{source}: field {field!r}: missing ({attr}=None)")
             arr.flags.writeable = False
-            object.__setattr__(self, attr, arr)
-        object.__setattr__(self, "source", source)
-        object.__setattr__(self, "info", dict(self.info))
+            arrays[attr] = arr
+        self.times, self.q, self.qd = arrays["times"], arrays["q"], arrays["qd"]
+        self.qdd, self.tau = arrays["qdd"], arrays["tau"]
+        self.source, self.info = source, dict(info or {})
 
     @property
     def n_joints(self) -> int:

@@ -14,16 +14,16 @@ e.g. on the Staubli TX40 motor 6 turns with joints 5 and 6: ``K[5, 4] = N[5]``.
 The motor side also has its own dynamics, identified with the joint-side model:
 the rotor inertia (armature) of motor ``m`` adds ``K[m]^T I_m (K[m] . qdd)`` to the joint
 torques, and a coupled motor's friction ``K[m]^T (Fv_m K[m] . qd + Fc_m sign(K[m] . qd))``
-(see :class:`~sedsabso_jax.identification.TorqueModel`'s ``armature`` and ``coupling``
+(see :class:`~sedsabso_jax.TorqueModel`'s ``armature`` and ``coupling``
 terms).
 """
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import TypeAlias
 
+import equinox as eqx
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
@@ -57,29 +57,28 @@ def _per_motor(name: str, value, n: int, *, nonzero: bool) -> np.ndarray:
     return arr
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
-class Transmission:
+class Transmission(eqx.Module):
     """Motor side to joint side (module docstring). ``matrix`` is ``K``, ``offset`` the
     joint position of each encoder zero, ``drive_gains`` the motor torque per unit of the
-    recorded current (None: the file records motor torques)."""
+    recorded current (None: the file records motor torques). Checked and converted when
+    built (a ValueError naming what is wrong)."""
 
     matrix: np.ndarray
     offset: np.ndarray
     drive_gains: np.ndarray | None = None
 
-    def __post_init__(self):
-        K = _square("the transmission matrix", self.matrix)
+    def __init__(self, matrix: Float[ArrayLike, "n n"], offset: Float[ArrayLike, " n"],
+                 drive_gains: Float[ArrayLike, " n"] | None = None):
+        K = _square("the transmission matrix", matrix)
         n = K.shape[0]
         cond = np.linalg.cond(K)
         if not cond < 1e12:
             raise ValueError(f"the transmission matrix is singular (condition number "
                              f"{cond:.3g}): motor angles do not determine the joints")
-        object.__setattr__(self, "matrix", K)
-        object.__setattr__(self, "offset", _per_motor("offset", self.offset, n,
-                                                      nonzero=False))
-        if self.drive_gains is not None:
-            object.__setattr__(self, "drive_gains", _per_motor(
-                "drive gains", self.drive_gains, n, nonzero=True))
+        self.matrix = K
+        self.offset = _per_motor("offset", offset, n, nonzero=False)
+        self.drive_gains = None if drive_gains is None else _per_motor(
+            "drive gains", drive_gains, n, nonzero=True)
 
     @classmethod
     def from_gear_ratios(cls, ratios: Float[ArrayLike, " n"] | Sequence[float], *,

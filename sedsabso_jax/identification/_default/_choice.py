@@ -19,7 +19,6 @@ from .._validation._phase import DEFAULT_FOLDS
 from .._validation._selection import ESTIMATOR_CANDIDATES
 from .._validation._splits import PhaseFolds, Pooled, RecordingFolds, SpeedSplits, Validation
 
-
 #: The weightings a fixed estimator is tried with (None: equal), simplest first.
 SIGMA_CANDIDATES = (None, "residual", "limits")
 #: ``sigma`` of :func:`estimator_candidates` that leaves the weighting to validation.
@@ -30,8 +29,8 @@ def estimator_candidates(method: str | None = None, sigma: Sigma = AUTO, **optio
                          ) -> tuple[Estimator, ...]:
     """The estimators the default chooses among.
 
-    - ``method`` None: :data:`~._validation.ESTIMATOR_CANDIDATES` (OLS, Gautier's WLS,
-      WLS by the limits), or those of them with weighting ``sigma``;
+    - ``method`` None: :data:`~sedsabso_jax.identification.ESTIMATOR_CANDIDATES` (OLS,
+      Gautier's WLS, WLS by the limits), or those of them with weighting ``sigma``;
     - a registered name (``"L1"``, ``"SEDSABSO"``, ...) with ``sigma`` :data:`AUTO`: that
       estimator with each weighting of :data:`SIGMA_CANDIDATES` (WLS without None, which
       is its residual weighting), except a costly one (a box search: every run is
@@ -59,9 +58,9 @@ def estimator_candidates(method: str | None = None, sigma: Sigma = AUTO, **optio
 
 
 class DefaultValidation(eqx.Module):
-    """What :func:`select_and_identify` chooses by unless told, made for the recordings
-    (:meth:`of`): ``Pooled((PhaseFolds(folds), SpeedSplits()))``, with
-    :class:`~._splits.RecordingFolds` (leave one recording out) instead of the phase folds
+    """What :func:`~sedsabso_jax.select_and_identify` chooses by unless told, made for
+    the recordings (:meth:`of`): ``Pooled((PhaseFolds(folds), SpeedSplits()))``, with
+    :class:`~sedsabso_jax.RecordingFolds` (leave one recording out) instead of the phase folds
     for several recordings."""
 
     folds: int = eqx.field(default=DEFAULT_FOLDS, converter=as_int)
@@ -80,7 +79,7 @@ class DefaultValidation(eqx.Module):
 
 @dataclasses.dataclass(frozen=True)
 class Names:
-    """How :class:`Choice`'s messages name the options: :func:`select_and_identify`'s
+    """How :class:`Choice`'s messages name the options: :func:`~sedsabso_jax.select_and_identify`'s
     arguments unless told (the command line gives its flags)."""
 
     physical: str = "physical=True"
@@ -94,11 +93,11 @@ class Names:
 
 
 class Choice(eqx.Module):
-    """How :func:`select_and_identify` chooses, with the rules between its options stated
-    once and checked when built (a one-line ValueError naming the options as ``names``
-    spells them): the command line builds one from its flags before it loads any data.
+    """How :func:`~sedsabso_jax.select_and_identify` chooses, with the rules between its
+    options stated once and checked when built (a one-line ValueError naming the options
+    as ``names`` spells them): the command line builds one from its flags before it loads any data.
 
-    ``validation``: what chooses (a :class:`~._splits.Validation`, a
+    ``validation``: what chooses (a :class:`~sedsabso_jax.Validation`, a
     :class:`DefaultValidation`, or None: nothing is validated, one candidate is fitted);
     ``physical``: only physically consistent fits (True), only unconstrained ones (False),
     or both (None); ``prior_strength``: a number, or ``"cv"`` to choose it by validation;

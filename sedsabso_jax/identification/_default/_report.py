@@ -22,12 +22,12 @@ from ..._output import (
     write_text,
 )
 from ...measurements._container import Measurements
-from .._validation._extrapolation import Extrapolation, extrapolation
 from .._estimators._estimator import Limits
 from .._fit._identify import Identification
-from .._recordings import joined, stacked
-from .._metrics import Metrics, validation_metrics
 from .._fit._uncertainty import relative_std_percent
+from .._metrics import Metrics, validation_metrics
+from .._recordings import joined, stacked
+from .._validation._extrapolation import Extrapolation, extrapolation
 from .._validation._selection import CrossValidation, PriorSelection, Selection
 
 if TYPE_CHECKING:
@@ -124,7 +124,7 @@ SAME_COLUMNS = "Columns as in the fit table above."
 
 def metrics_table(metrics: Metrics, joint_names: Sequence[str]) -> str:
     """Markdown table of ``metrics``: one row per joint and one for the overall figures
-    (the numbers of :meth:`~._metrics.Metrics.table`; columns in :data:`METRICS_NOTE`)."""
+    (the numbers of :meth:`~sedsabso_jax.Metrics.table`; columns in :data:`METRICS_NOTE`)."""
     limits = metrics.nrms_limits_percent_per_joint
     rows = [[name, f"{metrics.rms[j]:.4g}", f"{metrics.relative_rms_percent[j]:.3f}",
              f"{metrics.nrms_range_percent[j]:.3f}",
@@ -167,12 +167,12 @@ class IdentificationReport:
     """An identification judged on its own data and, when given, on held-out data.
 
     ``data`` and ``held_out`` are :class:`~sedsabso_jax.Measurements`; ``fit`` and
-    ``validation`` their :class:`~._metrics.Metrics` (``validation`` None without held-out
-    data); ``predicted`` the predicted torques of each; ``cross_validation`` the chosen
-    setting's :class:`~._validation.CrossValidation` on ``data`` and ``selection`` the
-    :class:`~._validation.Selection` it came from, ``prior_selection`` the
-    :class:`~._validation.PriorSelection` of a physical fit's pull to the prior (each None
-    when not run).
+    ``validation`` their :class:`~sedsabso_jax.Metrics` (``validation`` None without
+    held-out data); ``predicted`` the predicted torques of each; ``cross_validation`` the
+    chosen setting's :class:`~sedsabso_jax.identification.CrossValidation` on ``data``
+    and ``selection`` the :class:`~sedsabso_jax.identification.Selection` it came from,
+    ``prior_selection`` the :class:`~sedsabso_jax.identification.PriorSelection` of a
+    physical fit's pull to the prior (each None when not run).
     """
 
     ident: Identification
@@ -185,7 +185,8 @@ class IdentificationReport:
     cross_validation: CrossValidation | None = None
     selection: Selection | None = None
     prior_selection: PriorSelection | None = None
-    #: how far ``held_out`` goes beyond ``data`` (:func:`~._extrapolation.extrapolation`)
+    #: how far ``held_out`` goes beyond ``data``
+    #: (:func:`~.._validation._extrapolation.extrapolation`)
     extrapolation: Extrapolation | None = None
 
     @classmethod
@@ -197,7 +198,7 @@ class IdentificationReport:
         """Predict the torques of ``data`` (one recording or several; their own torque
         offsets where the model has one per recording) and of ``held_out``, and compare;
         with ``held_out``, measure how far it goes beyond ``data``
-        (:func:`~._extrapolation.extrapolation`) and warn when a joint is beyond the
+        (:func:`~sedsabso_jax.identification.extrapolation`) and warn when a joint is beyond the
         thresholds."""
         recordings = [data] if isinstance(data, Measurements) else list(data)
         data = joined(recordings)

@@ -62,21 +62,23 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
     """Identify ``robot`` from ``data`` as ``sedsabso-jax identify`` does by default.
 
     1. Model choice: every estimator of ``estimators`` (default
-       :data:`~._validation.ESTIMATOR_CANDIDATES`; one :class:`~._fitting.Estimator` or a
-       sequence, e.g. :func:`estimator_candidates`), unconstrained and physically
-       consistent (``physical`` None; True: only physically consistent, False: only
-       unconstrained), with every torque model of ``models`` (default
-       :func:`~._model.candidate_models` of the robot) is scored by ``validation`` and the
-       simplest within one standard error of the lowest is kept
-       (:func:`~._validation.select_model`). The default, :class:`DefaultValidation`,
+       :data:`~sedsabso_jax.identification.ESTIMATOR_CANDIDATES`; one
+       :class:`~sedsabso_jax.Estimator` or a sequence, e.g.
+       :func:`~sedsabso_jax.identification.estimator_candidates`), unconstrained and
+       physically consistent (``physical`` None; True: only physically consistent, False:
+       only unconstrained), with every torque model of ``models`` (default
+       :func:`~sedsabso_jax.identification.candidate_models` of the robot) is scored by
+       ``validation`` and the simplest within one standard error of the lowest is kept
+       (:func:`~sedsabso_jax.select_model`). The default,
+       :class:`~._choice.DefaultValidation`,
        pools 5 folds of the motion's phase (leave one recording out for several
-       recordings), where the model interpolates, with :class:`~._splits.SpeedSplits`,
+       recordings), where the model interpolates, with :class:`~sedsabso_jax.SpeedSplits`,
        where it must extrapolate in speed as on a faster motion: its score is the error to
        expect on new motions, and the report gives each part's too. With one candidate, it
        is only validated (``validation=None``: not at all).
     2. ``prior_strength``, a number or ``"cv"`` (chosen from
-       :data:`~._validation.PRIOR_STRENGTHS` by the same validation,
-       :func:`~._validation.choose_prior_strength`), pulls a physically consistent fit
+       :data:`~sedsabso_jax.identification.PRIOR_STRENGTHS` by the same validation,
+       :func:`~sedsabso_jax.choose_prior_strength`), pulls a physically consistent fit
        toward the robot's a-priori parameters.
     3. The fit on all of ``data``, judged on it, on the validation and on ``held_out``
        (never used to choose or fit).

@@ -23,11 +23,11 @@ from ...optim._driver import minimise
 from ...optim._fitness import L1Residual
 from ...optim._registry import SWARMS, paper_solver
 from ...optim._solver import AbstractSolver
-from ._least_squares import SigmaOption, check_prior, prior_of
-from ._row_fits import AbstractRowFit
-from ._estimator import EstimatorFit, FitProblem, Limits, check_sigma, check_weighting, weigh
 from .._model._torque_model import TorqueModel
 from .._options import as_float, as_floats, as_int, check_count
+from ._estimator import EstimatorFit, FitProblem, Limits, check_sigma, check_weighting, weigh
+from ._least_squares import SigmaOption, check_prior, prior_of
+from ._row_fits import AbstractRowFit
 
 #: A parameter within this fraction of the box's width of a face is on that face.
 FACE_TOLERANCE = 1e-3

@@ -3,9 +3,9 @@ it returns (:class:`EstimatorFit`), the one row weighting (:func:`weigh`), and t
 :class:`Estimator` interface with its registry of names.
 
 An estimator is an immutable ``equinox.Module`` carrying only its own options, converted
-and checked when it is built, with one :meth:`~Estimator.fit` method (:mod:`._estimators`
-and :mod:`._box_search` have them all). A final class that sets ``registered_as =
-{"NAME": {}}`` is known by that name to the command line's ``--method`` and to
+and checked when it is built, with one :meth:`~Estimator.fit` method (the modules of
+:mod:`~sedsabso_jax.identification._estimators` have them all). A final class that sets
+``registered_as = {"NAME": {}}`` is known by that name to the command line's ``--method`` and to
 :meth:`Estimator.named`: writing the class is all it takes to add one.
 """
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
@@ -49,7 +49,7 @@ def per_joint(name: str, value: Sigma, n: int, allow_none: bool = True
 
 def check_sigma(sigma: object) -> None:
     """That ``sigma`` (numbers converted to a tuple of floats,
-    :func:`~._options.as_floats`) is None (the estimator's default
+    :func:`~.._options.as_floats`) is None (the estimator's default
     weighting), ``"equal"``, ``"residual"``, ``"limits"`` or positive finite numbers (one
     per joint; their count is checked against the model)."""
     if sigma is None or (isinstance(sigma, str) and sigma in ("equal", "residual", "limits")):
@@ -270,7 +270,7 @@ class Estimator(eqx.Module):
     @abc.abstractmethod
     def physically_consistent(self) -> "Estimator":
         """This fit over parameters a real body can have: a least-squares fit's
-        :class:`~._estimators.PhysicallyConsistent` form (itself if it is one); a
+        :class:`~._least_squares.PhysicallyConsistent` form (itself if it is one); a
         ValueError naming the estimator for the others."""
 
     @property

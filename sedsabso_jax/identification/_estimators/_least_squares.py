@@ -24,6 +24,8 @@ import equinox as eqx
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
+from .._model._torque_model import TorqueModel
+from .._options import as_float, as_floats, check_number
 from ._estimator import (
     Estimator,
     EstimatorFit,
@@ -31,12 +33,9 @@ from ._estimator import (
     Limits,
     check_sigma,
     check_weighting,
-    no_physical_form,
     weigh,
     weighting_settings,
 )
-from .._model._torque_model import TorqueModel
-from .._options import as_float, as_floats, check_number
 from ._physical import PSD_MARGIN, fit_bodies, fit_physical
 
 #: An estimator's ``sigma`` as kept: None, a weighting's name, or one number per joint.
@@ -44,7 +43,7 @@ SigmaOption = str | tuple[float, ...] | None
 
 
 def check_prior(prior: object) -> None:
-    """That a prior (as :func:`~._options.as_floats` converted it) is None (the robot's
+    """That a prior (as :func:`~.._options.as_floats` converted it) is None (the robot's
     own parameters) or finite full parameters (12 per link; the count is checked against
     the robot)."""
     if prior is not None and not (isinstance(prior, tuple) and np.all(np.isfinite(prior))):
@@ -91,7 +90,7 @@ class AbstractLeastSquares(Estimator):
 
 
 class OLS(AbstractLeastSquares):
-    """Ordinary least squares; ``sigma`` weights the rows (:func:`~._fitting.weigh`;
+    """Ordinary least squares; ``sigma`` weights the rows (:func:`~._estimator.weigh`;
     None: equal weights)."""
 
     sigma: SigmaOption = eqx.field(default=None, converter=as_floats)
@@ -115,7 +114,7 @@ class PhysicallyConsistent(Estimator):
     name it takes) over full link parameters a real body can have: every link's
     pseudo-inertia positive definite, friction and armature coefficients >= 0
     (:mod:`._physical`; a semidefinite programme solved by Clarabel). It returns the full
-    parameters too (:meth:`~._identify.Identification.urdf`).
+    parameters too (:meth:`~sedsabso_jax.Identification.urdf`).
 
     ``prior`` (full parameters, default the robot's own) is pulled toward with weight
     ``prior_weight`` plus ``prior_strength`` times the data term's mean curvature (the

@@ -24,8 +24,8 @@ import dataclasses
 import numpy as np
 from jaxtyping import Bool, Float
 
-from ._estimator import FitProblem
 from .._model._torque_model import TorqueModel
+from ._estimator import FitProblem
 
 #: Eigenvalues of a joint's scaled normal matrix below this fraction of its largest are
 #: directions the rows do not determine (the rank tolerance of the rows' QR, squared).

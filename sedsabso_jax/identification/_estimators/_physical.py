@@ -22,7 +22,7 @@ through the ``d x d`` triangular factor of :func:`~sedsabso_jax.optim._linear.fa
 the programme is built once per model shape, with the data as parameters).
 ``lambda`` is the user's ``prior_weight`` plus ``prior_strength`` times the data term's
 mean curvature (the scale-free form, chosen by validation in
-:func:`~._validation.choose_prior_strength`), but at least :data:`RIDGE` times that
+:func:`~sedsabso_jax.choose_prior_strength`), but at least :data:`RIDGE` times that
 curvature: the data leave some directions of ``p`` free (the non-identifiable ones), and
 along some of them the feasible set is unbounded, so a tiny pull to the prior keeps the
 solution finite. A solve that is not optimal is an error; an inaccurate one a warning.
@@ -101,6 +101,7 @@ def _programme(n_joints: int, dim: int, n_extra: int, nonneg: tuple[int, ...],
     if nonneg and extras is not None:  # friction and armature extras
         constraints.append(extras[list(nonneg)] >= 0)
     for k, start in enumerate(bodies):  # extras that are a body's 10 inertial parameters
+        assert extras is not None  # a body is extra columns
         B = cp.Variable((4, 4), symmetric=True, name=f"body{k + 1}")
         constraints += [B - PSD_MARGIN * np.eye(4) >> 0,
                         extras[start:start + 10] == cp.hstack(_inertial_params(B))]
@@ -123,7 +124,7 @@ def fit_physical(model: TorqueModel, factor: Factorization, prior: Float[ArrayLi
     is ``lambda = prior_weight + prior_strength * (the data term's mean curvature)``:
     ``prior_strength`` is scale-free (the same value means the same balance for any
     weighting, robot or number of samples), which is what validation chooses
-    (:func:`~._validation.choose_prior_strength`)."""
+    (:func:`~sedsabso_jax.choose_prior_strength`)."""
     import cvxpy as cp
 
     n = model.robot.n_joints

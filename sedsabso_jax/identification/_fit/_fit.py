@@ -15,8 +15,9 @@ on none of their kinds:
 3. **The estimator's fit** of the model so completed (OLS, WLS, physically consistent,
    L1, a box search: any), through the normal equations where the samples are a
    validation's subset and the estimator reads only them; again, with the values each
-   fit gives, while a term reads every fit's values (:attr:`~sedsabso_jax.identification.AbstractTerm.iterates`:
-   a fixed point), until its columns change by less than :data:`SETTLE_RTOL`.
+   fit gives, while a term reads every fit's values (a fixed point,
+   :attr:`~sedsabso_jax.identification.AbstractTerm.iterates`), until its columns
+   change by less than :data:`SETTLE_RTOL`.
 
 :func:`fit` returns the model as fitted (its parameters found, the values its terms
 read) with the estimator's fit and a report of the stages.
@@ -78,12 +79,20 @@ def search_weights(estimator: Estimator, model: TorqueModel, limits: np.ndarray 
 def search(estimator: Estimator, model: TorqueModel, samples: Samples,
            limits: np.ndarray | None) -> tuple[TorqueModel, dict]:
     """The model with its nonlinear parameters at the best its search method finds
-    (module docstring, stage 2), and what the search did."""
+    (module docstring, stage 2), and what the search did; kept on the samples for the
+    next estimator with the same row weights (a validation's candidates)."""
+    weights = search_weights(estimator, model, limits)
+    return samples.kept(("searched", weights.tobytes()), model,
+                        lambda: _searched(model, samples, weights))
+
+
+def _searched(model: TorqueModel, samples: Samples, weights: np.ndarray
+              ) -> tuple[TorqueModel, dict]:
     found = [f for _, f in model.nonlinear()]
     lower = np.log(np.concatenate([f.lower for f in found]))
     upper = np.log(np.concatenate([f.upper for f in found]))
     start = np.log(np.concatenate([f.values for f in found]))
-    problem = Projection.of(model, samples, search_weights(estimator, model, limits))
+    problem = Projection.of(model, samples, weights)
     method = model.searched_by
     searched = method.search(problem, start, lower, upper)
     return model.with_nonlinear(np.exp(searched.u)), {
@@ -115,7 +124,7 @@ def fit(estimator: Estimator, model: TorqueModel, samples: Samples,
             break
         out = linear(estimator, model, samples, limits, False)
         iterations += 1
-    step = {"iterations": iterations}
+    step: dict = {"iterations": iterations}
     if model.iterates:
         step.update(change=change, settled=change < SETTLE_RTOL)
         if change >= SETTLE_RTOL and warn:

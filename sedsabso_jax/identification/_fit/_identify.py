@@ -34,9 +34,9 @@ from .._estimators._estimator import (
     per_joint,
 )
 from .._estimators._least_squares import OLS
+from .._metrics import nrms_over_limits
 from .._model._torque_model import TorqueModel, model_of, regrouped_message
 from .._recordings import Data, is_several, recordings_of, stacked
-from .._metrics import nrms_over_limits
 from ._fit import fit as fit_model
 from ._samples import Samples
 from ._uncertainty import parameter_std, relative_std_percent, searched_std
@@ -170,10 +170,10 @@ def identified(robot: Robot, data: Data, estimator: Estimator, model: TorqueMode
     for what a caller derives from the values)."""
     checked_estimator(estimator)
     model = model_of(robot, model)
+    limits = per_joint("limits", limits, robot.n_joints)
+    estimator.check(model, limits)  # what can be checked before any data are read
     recordings = recordings_of(robot, data)
     model.check_recordings(len(recordings))
-    limits = per_joint("limits", limits, robot.n_joints)
-    estimator.check(model, limits)
     if model.regrouped:
         warnings.warn(regrouped_message(model), stacklevel=caller_stacklevel())
     q, qd, qdd, tau, index = stacked(recordings)

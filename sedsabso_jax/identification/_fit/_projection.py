@@ -29,6 +29,7 @@ from __future__ import annotations
 import dataclasses
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
@@ -49,10 +50,12 @@ PROBE_STEP = 0.5
 @dataclasses.dataclass(frozen=True, eq=False)
 class Recipe:
     """The static part of a :class:`Projection`: the model, the column blocks a trial
-    computes (the Coulomb columns where a term reshapes them, then the terms'
-    ``terms``), and the moved columns' (block column, joint) pairs. Equal (and hashed)
-    by what the compiled code reads, so that problems of one model structure share a
-    compilation."""
+    computes (the Coulomb columns where a term reshapes them, then the terms
+    ``terms``), the moved columns' (block column, joint) pairs, and for each joint whose
+    row a moved column reaches, the unmoved columns nonzero on that row (``rows``:
+    ``(joint, columns)``; a joint's own friction meets few of the robot's columns).
+    Equal (and hashed) by what the compiled code reads, so that problems of one model
+    structure share a compilation."""
 
     model: TorqueModel
     coulomb: bool
@@ -60,6 +63,7 @@ class Recipe:
     pair_column: tuple[int, ...]
     pair_joint: tuple[int, ...]
     moved_columns: int
+    rows: tuple[tuple[int, tuple[int, ...]], ...]
 
     @property
     def key(self) -> tuple:
@@ -70,13 +74,19 @@ class Recipe:
                         is not None)
         return (id(m.base), m.recordings, None if m.transmission is None
                 else m.transmission.tobytes(), tuple(m.terms[i] for i in self.terms),
-                shaping, self.coulomb, self.pair_column, self.pair_joint, self.moved_columns)
+                shaping, self.coulomb, self.pair_column, self.pair_joint, self.moved_columns,
+                self.rows)
 
     def __hash__(self) -> int:
         return hash(self.key)
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Recipe) and self.key == other.key
+
+    @property
+    def column_of_pair(self) -> np.ndarray:
+        """Each pair's column among the moved columns (0..moved_columns-1)."""
+        return np.unique(np.asarray(self.pair_column), return_inverse=True)[1]
 
 
 class Projection(eqx.Module):
@@ -92,8 +102,7 @@ class Projection(eqx.Module):
     weights: Float[Array, " n"]
     mask: Float[Array, " T"]
     A: Float[Array, "T n p"]        # the columns no trial moves, weighted, scaled, masked
-    pair_A: Float[Array, "T K p"]   # A at each pair's joint row
-    pair_b: Float[Array, "T K"]     # b at each pair's joint row
+    A_rows: tuple                   # per joint of recipe.rows, A at its row and columns
     b: Float[Array, "T n"]          # the torques, weighted, masked
     AtA: Float[Array, "p p"]
     Atb: Float[Array, " p"]
@@ -126,27 +135,34 @@ class Projection(eqx.Module):
                              f"search")
         root = samples.root
         u0 = np.log(np.concatenate([f.values for _, f in found]))
-        Y0 = root.rows(model, every_column=True)
-        Y1 = root.rows(model.with_nonlinear(np.exp(u0 + PROBE_STEP)), every_column=True)
+        # kept for the other splits where the whole's rows of this model are (a model
+        # the validation fits unchanged on every split)
+        Y0 = root.rows(model, every_column=True, cache=root.has_rows(model))
+        Y1 = root.rows(model.with_nonlinear(np.exp(u0 + PROBE_STEP)), every_column=True,
+                       cache=False)
         moved = np.any(Y0 != Y1, axis=(0, 1))
         recipe = _recipe(model, moved, (Y0 != 0) | (Y1 != 0))
-        mask = np.zeros(root.q.shape[0])
-        mask[np.arange(root.q.shape[0]) if samples.keep is None else samples.keep] = 1.0
+        T = root.q.shape[0]
+        mask = np.zeros(T)
+        mask[np.arange(T) if samples.keep is None else samples.keep] = 1.0
         w = np.asarray(weights, dtype=float)
         A = Y0[..., ~moved] * (w[:, None] * mask[:, None, None])
-        scale = np.linalg.norm(A.reshape(-1, A.shape[-1]), axis=0)
-        A = A / np.where(scale > 0, scale, 1.0)
-        b = root.tau * w * mask[:, None]
         M = A.reshape(-1, A.shape[-1])
-        joints = np.asarray(recipe.pair_joint, dtype=int)
-        return cls(root.q, root.qd, root.qdd, root.recording,
-                   Signals(root.q, root.qd, root.qdd, root.recording, None).increments(),
-                   model.signals(root.q, root.qd, root.qdd, root.recording,
-                                 root.base_rows(model)).rigid, jnp.asarray(w),
-                   jnp.asarray(mask), jnp.asarray(A), jnp.asarray(A[:, joints, :]),
-                   jnp.asarray(b[:, joints]), jnp.asarray(b), jnp.asarray(M.T @ M),
-                   jnp.asarray(M.T @ b.reshape(-1)), jnp.asarray(float(b.reshape(-1)
-                                                                       @ b.reshape(-1))),
+        scale = np.linalg.norm(M, axis=0)
+        scale = np.where(scale > 0, scale, 1.0)
+        A, M = A / scale, M / scale
+        b = root.tau * w * mask[:, None]
+        rigid = model.signals(root.q, root.qd, root.qdd, root.recording,
+                              root.base_rows(model)).rigid
+        steps = Signals(root.q, root.qd, root.qdd, root.recording, None).increments()
+        return cls(jnp.asarray(root.q), jnp.asarray(root.qd), jnp.asarray(root.qdd),
+                   None if root.recording is None else jnp.asarray(root.recording),
+                   tuple(jnp.asarray(a) for a in steps),
+                   None if rigid is None else jnp.asarray(rigid), jnp.asarray(w),
+                   jnp.asarray(mask), jnp.asarray(A),
+                   tuple(jnp.asarray(A[:, j][:, list(cols)]) for j, cols in recipe.rows),
+                   jnp.asarray(b), jnp.asarray(M.T @ M), jnp.asarray(M.T @ b.reshape(-1)),
+                   jnp.asarray(float(b.reshape(-1) @ b.reshape(-1))),
                    jnp.asarray(float(mask.sum() * model.robot.n_joints)), recipe)
 
     def moving(self, u: Float[Array, " k"]) -> Float[Array, "T K"]:
@@ -165,16 +181,30 @@ class Projection(eqx.Module):
         return V * self.weights[joints] * self.mask[:, None]
 
     def _normal(self, u):
-        """The scaled normal equations ``G x = h`` at ``u`` and the moved columns'
-        scale."""
+        """The scaled normal equations ``G x = h`` at ``u``, the moved columns' scale and
+        their values: the cross products of each joint's row with its few columns."""
         r = self.recipe
         V = self.moving(u)
-        S = np.zeros((len(r.pair_column), r.moved_columns))
-        S[np.arange(len(r.pair_column)), _column_of_pair(r)] = 1.0
-        same = np.equal.outer(np.asarray(r.pair_joint), np.asarray(r.pair_joint))
-        AtC = jnp.einsum("tkp,tk->pk", self.pair_A, V) @ S
-        CtC = S.T @ ((V.T @ V) * same) @ S
-        Ctb = S.T @ jnp.einsum("tk,tk->k", V, self.pair_b)
+        joints = np.asarray(r.pair_joint)
+        blocks, rows, cols, gram, gi, gj = [], [], [], [], [], []
+        for (j, columns), Aj in zip(r.rows, self.A_rows):
+            pairs = np.flatnonzero(joints == j)
+            Vj = V[:, pairs]
+            blocks.append((Aj.T @ Vj).reshape(-1))
+            rows.append(np.repeat(columns, len(pairs)))
+            cols.append(np.tile(pairs, len(columns)))
+            gram.append((Vj.T @ Vj).reshape(-1))
+            gi.append(np.repeat(pairs, len(pairs)))
+            gj.append(np.tile(pairs, len(pairs)))
+        K, p = len(joints), self.AtA.shape[0]
+        AtV = jnp.zeros((p, K)).at[np.concatenate(rows), np.concatenate(cols)].set(
+            jnp.concatenate(blocks))
+        VtV = jnp.zeros((K, K)).at[np.concatenate(gi), np.concatenate(gj)].set(
+            jnp.concatenate(gram))
+        S = np.zeros((K, r.moved_columns))
+        S[np.arange(K), r.column_of_pair] = 1.0
+        AtC, CtC = AtV @ S, S.T @ VtV @ S
+        Ctb = S.T @ jnp.sum(V * self.b[:, joints], axis=0)
         norms = jnp.sqrt(jnp.diag(CtC))
         c = 1.0 / jnp.where(norms > 0, norms, 1.0)
         G = jnp.block([[self.AtA, AtC * c], [(AtC * c).T, CtC * jnp.outer(c, c)]])
@@ -182,15 +212,24 @@ class Projection(eqx.Module):
         return G, h, c, V
 
     def _solve(self, G, h):
+        """The normal equations' solution (Cholesky; a :data:`RIDGE` keeps them
+        positive definite)."""
         ridge = RIDGE * jnp.max(jnp.diag(G))
-        return jnp.linalg.solve(G + ridge * jnp.eye(G.shape[0]), h)
+        factor = jax.scipy.linalg.cho_factor(G + ridge * jnp.eye(G.shape[0]))
+        return jax.scipy.linalg.cho_solve(factor, h)
 
     def loss(self, u: Float[Array, " k"]) -> Float[Array, ""]:
         """The weighted residual's mean square over the samples fitted, the linear
         values solved (module docstring)."""
         G, h, _, _ = self._normal(u)
-        x = self._solve(G, h)
-        return (self.btb - 2 * x @ h + x @ G @ x) / self.rows
+        return (self.btb - self._solve(G, h) @ h) / self.rows
+
+    @staticmethod
+    def fitness(u: Float[Array, " k"], problem: Projection) -> Float[Array, ""]:
+        """:meth:`loss` as a fitness ``f(u, args)`` whose ``args`` is the problem, for
+        :func:`~sedsabso_jax.minimise` (``args=problem``: the problem's arrays are the
+        compiled run's arguments, not constants baked into it)."""
+        return problem.loss(u)
 
     def residual(self, u: Float[Array, " k"]) -> Float[Array, " N"]:
         """The weighted residual ``(T n,)`` at ``u``, the linear values solved (zero on
@@ -199,18 +238,13 @@ class Projection(eqx.Module):
         x = self._solve(G, h)
         p = self.A.shape[-1]
         r = self.recipe
-        xc = (x[p:] * c)[_column_of_pair(r)]
+        xc = (x[p:] * c)[r.column_of_pair]
         fitted = (self.A @ x[:p]).at[:, np.asarray(r.pair_joint)].add(V * xc)
         return (fitted - self.b).reshape(-1) * jnp.sqrt(self.b.size / self.rows)
 
 
-def _column_of_pair(recipe: Recipe) -> np.ndarray:
-    """Each pair's column among the moved columns (0..moved_columns-1)."""
-    return np.unique(np.asarray(recipe.pair_column), return_inverse=True)[1]
-
-
 def _recipe(model: TorqueModel, moved: np.ndarray, nonzero: np.ndarray) -> Recipe:
-    """The blocks and pairs of ``model``'s moved columns (``moved``: per column of
+    """The blocks, pairs and rows of ``model``'s moved columns (``moved``: per column of
     every column, ``nonzero (T, n, D)``: where either probe's rows were nonzero)."""
     rank = model.base.rank
     sizes = [len(t.names(model)) for t in model.terms]
@@ -231,5 +265,8 @@ def _recipe(model: TorqueModel, moved: np.ndarray, nonzero: np.ndarray) -> Recip
             for j in np.flatnonzero(np.any(nonzero[:, :, e], axis=0)):
                 pair_column.append(m)
                 pair_joint.append(int(j))
+    on_row = np.any(nonzero[:, :, ~moved], axis=0)  # (n, unmoved columns)
+    rows = tuple((j, tuple(int(c) for c in np.flatnonzero(on_row[j])))
+                 for j in sorted(set(pair_joint)))
     return Recipe(model, coulomb, tuple(terms), tuple(pair_column), tuple(pair_joint),
-                  int(moved.sum()))
+                  int(moved.sum()), rows)

@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
+from ...dynamics._robot import Robot
 from .._estimators._estimator import FitProblem
 from .._estimators._normal_equations import NormalEquations
-from ...dynamics._robot import Robot
 from .._model._torque_model import TorqueModel
 from .._recordings import Data, recordings_of, stacked
 
@@ -46,8 +46,9 @@ class Samples:
         q, qd, qdd, tau, index = stacked(recordings)
         return cls(q, qd, qdd, tau, index if len(recordings) > 1 else None)
 
-    def _cached(self, kind: str, owner: Any, make) -> Any:
-        """``make()``, kept per (``kind``, ``owner``); ``owner`` is kept alive with it."""
+    def kept(self, kind: Any, owner: Any, make) -> Any:
+        """``make()``, kept on these samples per (``kind``, ``owner``); ``owner`` is kept
+        alive with it."""
         key = (kind, id(owner))
         if key not in self._kept:
             self._kept[key] = (owner, make())
@@ -62,7 +63,7 @@ class Samples:
         """The base regressor's rows ``(T, n, b)`` (computed once, on the whole)."""
         if self.whole is not None:
             return self.whole.base_rows(model)[self.keep]
-        return self._cached("base", model.base, lambda: np.asarray(
+        return self.kept("base", model.base, lambda: np.asarray(
             model.base.regressor(self.q, self.qd, self.qdd)))
 
     def _rows(self, model: TorqueModel, every_column: bool) -> np.ndarray:
@@ -77,13 +78,19 @@ class Samples:
         :meth:`~sedsabso_jax.TorqueModel.regressor`'s): the whole's rows of the model,
         taken, where they were computed; on the whole, kept (``cache``)."""
         if every_column:
+            if self.whole is None and cache:
+                return self.kept("every", model, lambda: self._rows(model, True))
             return self._rows(model, True)
         found = self.root._kept.get(("rows", id(model)))
         if found is not None:
             return found[1] if self.whole is None else found[1][self.keep]
         if self.whole is not None or not cache:
             return self._rows(model, False)
-        return self._cached("rows", model, lambda: self._rows(model, False))
+        return self.kept("rows", model, lambda: self._rows(model, False))
+
+    def has_rows(self, model: TorqueModel) -> bool:
+        """Whether the whole's rows of ``model`` are kept."""
+        return ("rows", id(model)) in self.root._kept
 
     def subset(self, keep: np.ndarray) -> Samples:
         """The samples ``keep`` (a mask or indices) selects: a validation's split,
@@ -106,8 +113,9 @@ class Samples:
         those of the samples it leaves out."""
         whole = self.whole
         rows = None if whole is None else whole._kept.get(("rows", id(model)))
-        if whole is None or rows is None or 2 * len(self.keep) <= whole.q.shape[0]:
-            return self._cached("normal", model, lambda: NormalEquations.of(self.rows(model),
+        if whole is None or rows is None or self.keep is None \
+                or 2 * len(self.keep) <= whole.q.shape[0]:
+            return self.kept("normal", model, lambda: NormalEquations.of(self.rows(model),
                                                                             self.tau))
         out = np.ones(whole.q.shape[0], dtype=bool)
         out[self.keep] = False
@@ -120,7 +128,7 @@ class Samples:
         limits), or the rows themselves."""
         if self.compressed:
             key = None if limits is None else np.asarray(limits).tobytes()
-            found = self._cached("problems", model, dict)
+            found = self.kept("problems", model, dict)
             if key not in found:
                 found[key] = self.normal_equations(model).problem(model, limits)
             return found[key]

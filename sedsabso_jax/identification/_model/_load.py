@@ -54,7 +54,7 @@ class LoadFriction(AbstractTerm):
     def iterates(self) -> bool:
         return self.fixed_point
 
-    def reading(self, model: ModelView, values: np.ndarray) -> AbstractTerm:
+    def reading(self, model: ModelView, values: Any) -> AbstractTerm:
         rigid = model.rigid_values(np.asarray(values, dtype=float))
         return dataclasses.replace(self, load_point=tuple(float(v) for v in rigid))
 
@@ -79,10 +79,11 @@ class LoadFriction(AbstractTerm):
 
     def columns(self, model: ModelView, s: Signals) -> Any:
         xp, n = s.xp, model.robot.n_joints
-        point = self.load_point
-        if point is None and s.probe is None:  # not fitted: the robot's own parameters
+        if self.load_point is None and s.probe is None:  # not fitted: the robot's own
             point = model.rigid_values(model.prior_values)
-        load = xp.abs(s.rigid_torque(np.asarray(point)))
+        else:
+            point = np.asarray(self.load_point)
+        load = xp.abs(s.rigid_torque(point))
         out = [diagonal(load * s.coulomb, n, xp)]
         if self.viscous:
             out.append(diagonal(load * s.qd, n, xp))

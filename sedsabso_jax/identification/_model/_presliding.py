@@ -57,6 +57,7 @@ class Presliding(AbstractScale):
         n = model.robot.n_joints
         dq, start = s.increments()
         sequential = None if self.scan == "auto" else self.scan == "sequential"
+        z: Any
         if s.xp is jnp:  # inside a compiled search: the state of the trial's q_c
             z = dahl_state(dq, start, self.per_joint(n, jnp), sequential=sequential)
         else:

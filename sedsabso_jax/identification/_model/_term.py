@@ -74,10 +74,10 @@ class Signals:
     q: Any
     qd: Any
     qdd: Any
-    recording: np.ndarray | None
+    recording: Any
     coulomb: Any
     xp: ModuleType = np
-    rigid: np.ndarray | None = None
+    rigid: Any = None
     probe: np.ndarray | None = None
     whole: "Signals | None" = None
     keep: np.ndarray | None = None
@@ -187,7 +187,7 @@ class AbstractTerm(eqx.Module):
         point), not only the first fit's."""
         return False
 
-    def reading(self, model: ModelView, values: np.ndarray) -> "AbstractTerm":
+    def reading(self, model: ModelView, values: Any) -> "AbstractTerm":
         """The term reading the model's fitted ``values`` (the base values first);
         itself for a term that reads none."""
         return self

@@ -190,7 +190,7 @@ def identify_payload(robot: Robot | Identification, loaded: Data, link: str, *,
     loaded_recs = _recordings(rob, loaded, "loaded")
     unloaded_recs = _recordings(rob, unloaded, "unloaded")
     recordings = recordings_of(rob, [*unloaded_recs, *loaded_recs])  # one rate for all
-    term = PayloadInertia(k, T, tuple(range(len(unloaded_recs), len(recordings))))
+    term = PayloadInertia(k, T, tuple(range(len(unloaded_recs), len(recordings))))  # type: ignore[arg-type]
     if unloaded_recs:
         tm = _joint_model(robot, model, len(recordings))
         found = _joint_fit(rob, recordings, tm, term, estimator, link)

@@ -14,10 +14,11 @@ squares ``x = D^-1 V S^-1 U^T b``. For a linear function ``g . x`` (a row of a J
 independent errors of equal variance after weighting), infinite where ``D^-1 g`` has a
 component along the null space of ``Ws``: the data do not determine that function.
 
-Physical consistency (Wensing, Kim & Slotine, IEEE RA-L 2018, as :mod:`~.._estimators._physical`): the
-payload is a body exactly when its pseudo-inertia ``J(p)`` is positive semidefinite. When
-the unconstrained ``p`` already is (eigenvalues >= :data:`~.._estimators._physical.PSD_MARGIN`), it is
-the constrained optimum too and is kept; otherwise :func:`consistent` solves::
+Physical consistency (Wensing, Kim & Slotine, IEEE RA-L 2018, as
+:mod:`~.._estimators._physical`): the payload is a body exactly when its pseudo-inertia
+``J(p)`` is positive semidefinite. When the unconstrained ``p`` already is (eigenvalues
+>= :data:`~.._estimators._physical.PSD_MARGIN`), it is the constrained optimum too and is
+kept; otherwise :func:`consistent` solves::
 
     min ||S V^T xs - U^T b||  +  ridge     over robot values and J >= PSD_MARGIN 1
 

@@ -33,7 +33,8 @@ def _masked(values: np.ndarray, std: np.ndarray) -> np.ndarray:
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Payload:
-    """What :func:`identify_payload` returns: a body fixed to a link, in the link's frame.
+    """What :func:`~sedsabso_jax.identify_payload` returns: a body fixed to a link, in
+    the link's frame.
 
     Attributes:
         link: the link named (a moving link, or one fixed to it: a flange, ``tool0``).

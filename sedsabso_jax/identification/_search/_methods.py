@@ -54,13 +54,14 @@ class AbstractSearch(eqx.Module):
 
 class CoordinateSearch(AbstractSearch):
     """Sweeps of every coordinate on a grid of ``points`` values at once (module
-    docstring): the first sweep's grid spans the bounds, each later one spans two of
-    the last grid's steps around the best (a grid ``(points - 1) / 4`` times finer);
+    docstring): the first sweep's grid spans the bounds, each later one spans one of the
+    last grid's steps either side of the best (``(points - 1) / 2`` times finer: the
+    minimum of a function of one variable lies within a step of its best grid point);
     ``sweeps`` sweeps, then a parabola through the best value and its two neighbours on
     the last grid, per coordinate."""
 
     points: int = eqx.field(default=9, converter=as_int)
-    sweeps: int = eqx.field(default=6, converter=as_int)
+    sweeps: int = eqx.field(default=4, converter=as_int)
     label: ClassVar[str] = "coordinate search"
 
     def __check_init__(self):
@@ -76,15 +77,15 @@ class CoordinateSearch(AbstractSearch):
         evaluations = 1
         centre, half = (lower + upper) / 2, (upper - lower) / 2
         for sweep in range(self.sweeps):
-            grid = np.clip(centre[:, None] + half[:, None] * np.linspace(-1, 1, G), lower[:, None],
-                           upper[:, None])  # (k, G)
+            grid = np.clip(centre[:, None] + half[:, None] * np.linspace(-1, 1, G),
+                           lower[:, None], upper[:, None])  # (k, G)
             trials = np.repeat(u[None], k * G, 0)
             trials[np.arange(k * G), np.repeat(np.arange(k), G)] = grid.reshape(-1)
             f = losses(problem, trials).reshape(k, G)
             evaluations += k * G
-            moved = u.copy()
             at = np.argmin(f, axis=1)
             better = f[np.arange(k), at] < best
+            moved = u.copy()
             moved[better] = grid[better, at[better]]
             if sweep == self.sweeps - 1:
                 moved = _parabola(moved, grid, f, at, better, lower, upper)
@@ -97,8 +98,7 @@ class CoordinateSearch(AbstractSearch):
                 u = u.copy()
                 u[single] = grid[single, np.argmin(f[single])]
                 best = float(f[single].min())
-            step = half / ((G - 1) / 2)
-            centre, half = u, 2 * step
+            centre, half = u, half * 2 / (G - 1)
         return Searched(u, best, evaluations, time.perf_counter() - t0)
 
 
@@ -108,6 +108,8 @@ def _parabola(u, grid, f, at, better, lower, upper):
     out = u.copy()
     for j in np.flatnonzero(better & (at > 0) & (at < grid.shape[1] - 1)):
         x, y = grid[j, at[j] - 1:at[j] + 2], f[j, at[j] - 1:at[j] + 2]
+        if not np.all(np.diff(x) > 0):  # points clipped onto a bound
+            continue
         d1, d2 = (y[1] - y[0]) / (x[1] - x[0]), (y[2] - y[1]) / (x[2] - x[1])
         curvature = (d2 - d1) / (x[2] - x[0])
         if curvature > 0:
@@ -188,6 +190,6 @@ def _levenberg_marquardt(problem: Any, u, lower, upper, max_steps: int, rtol: fl
                          atol: float):
     import optimistix as optx
 
-    sol = optx.least_squares(_clipped, optx.LevenbergMarquardt(rtol=rtol, atol=atol), u,
+    sol: Any = optx.least_squares(_clipped, optx.LevenbergMarquardt(rtol=rtol, atol=atol), u,
                              args=(problem, lower, upper), max_steps=max_steps, throw=False)
     return sol.value, sol.stats["num_steps"]

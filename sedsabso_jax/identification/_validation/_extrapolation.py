@@ -168,7 +168,7 @@ def extrapolation(data: Measurements, held_out: Measurements, *,
                   warn: bool = False) -> Extrapolation:
     """How far ``held_out`` goes beyond ``data`` (both joint-side
     :class:`~sedsabso_jax.Measurements`, e.g. after
-    :meth:`~sedsabso_jax.measurements.Transmission.to_joint_side`), per joint.
+    :meth:`~sedsabso_jax.Transmission.to_joint_side`), per joint.
 
     Per joint ``j``, with ``lo, hi`` the ``quantile`` and ``1 - quantile`` quantiles of
     ``q[:, j]`` (``quantile=0``: min and max) and peaks the ``1 - quantile`` quantile of

@@ -7,12 +7,12 @@ and a set to predict. Two kinds answer two questions:
   usually repeats its motion (the KUKA LWR4+ runs hold two periods of one trajectory, the
   Panda's one and a half), so a contiguous block held out of one period is fitted in the
   other and contiguous-block cross-validation measures repeatability. Phase folds are
-  stretches of the trajectory's PHASE (:func:`phase_folds`: the repeat period is found
+  stretches of the trajectory's PHASE (:func:`~._phase.phase_folds`: the repeat period is found
   from the positions' autocorrelation, fold ``k`` holds every sample whose phase lies in
   ``[k/K, (k+1)/K)``; a recording that does not repeat has phase = time). They predict the
   error on motions like the fitted one: the model only ever interpolates.
 - **speed splits** (:class:`~._splits.SpeedSplits`, the default of
-  :func:`~._auto.select_and_identify`): each joint's fast samples predicted by a fit to its
+  :func:`~sedsabso_jax.select_and_identify`): each joint's fast samples predicted by a fit to its
   slow ones, as a new, faster motion asks the model to extrapolate (friction at speeds
   never fitted). Leave one recording out (:class:`~._splits.RecordingFolds`) where there
   are several.
@@ -32,9 +32,9 @@ one could use; simpler is fewer parameters, then physically consistent, then the
 estimator. Nothing here looks at held-out files: they are for judging the choice, never
 for making it.
 
-Each takes the data as a :class:`~sedsabso_jax.Measurements`, several of them, or
-``(times, q, qd, qdd, tau)``, estimator objects (:mod:`._estimators`), built torque models
-(:class:`~._model.TorqueModel`) and a validation object (default ``PhaseFolds()``).
+Each takes the data as :func:`~sedsabso_jax.identify` does, estimator objects, built
+torque models (:class:`~sedsabso_jax.TorqueModel`) and a validation object (default
+``PhaseFolds()``).
 """
 
 
@@ -81,7 +81,8 @@ class _Fits:
         self.progress, self.total, self.done = progress, total, 0
 
     def after(self, label: str) -> Callable[[], None] | None:
-        """The ``on_fit`` of :func:`~._folds.cross_validation_of` for fits labelled so."""
+        """The ``on_fit`` of :func:`~._cross_validation.cross_validation_of` for fits
+        labelled so."""
         if self.progress is None:
             return None
         report = self.progress
@@ -110,7 +111,8 @@ class Prepared:
                             f"RecordingFolds(), GivenFolds(labels), Pooled(...)), got "
                             f"{validation!r}")
         recordings = recordings_of(robot, data)
-        return cls(recordings, Samples(*stacked(recordings)), validation.splits(recordings),
+        q, qd, qdd, tau, index = stacked(recordings)
+        return cls(recordings, Samples(q, qd, qdd, tau, index), validation.splits(recordings),
                    validation)
 
     def validate(self, estimator: Estimator, model: TorqueModel, limits: np.ndarray | None,
@@ -125,10 +127,10 @@ def cross_validate(robot: Robot, data: Data, estimator: Estimator = OLS(),
                    model: TorqueModel | None = None, *,
                    validation: Validation = PhaseFolds(), limits: Limits = None,
                    progress: ProgressCallback | None = None) -> CrossValidation:
-    """Validate :func:`~._identify.identify` ``(robot, data, estimator, model)``: fit each
+    """Validate :func:`~sedsabso_jax.identify` ``(robot, data, estimator, model)``: fit each
     split of ``validation`` (a :class:`~._splits.Validation`; default
     :data:`DEFAULT_FOLDS` phase folds) and predict it. ``data``: one recording or several
-    (stacked); ``model`` and ``limits`` as in :func:`~._identify.identify`;
+    (stacked); ``model`` and ``limits`` as in :func:`~sedsabso_jax.identify`;
     ``progress(label, done, total)`` is called after each split's fit (``total``: the
     splits)."""
     prepared = Prepared.of(robot, data, validation)
@@ -201,7 +203,8 @@ def simplest_not_worse(scores: Sequence[CrossValidation], physical: Sequence[boo
     """The index of the candidate the one-standard-error rule picks among ``scores``
     (each candidate's validation, ``physical`` whether its fit is physically
     consistent): the simplest, fewest parameters, then physically consistent, then the
-    earlier, of those not worse than the lowest-scoring one (:func:`~._folds.not_worse`)."""
+    earlier, of those not worse than the lowest-scoring one
+    (:func:`~._cross_validation.not_worse`)."""
     best = min(scores, key=lambda cv: cv.score)
     order = sorted(range(len(scores)), key=lambda i: (scores[i].n_parameters,
                                                       not physical[i], i))
@@ -215,14 +218,14 @@ def select_model(robot: Robot, data: Data, *,
                  progress: ProgressCallback | None = None) -> Selection:
     """Choose the torque model and the estimator by validation (module docstring).
 
-    ``models`` (default :func:`~._model.candidate_models` of the robot: its
-    :data:`~._model.FRICTION_CANDIDATES`) and ``estimators`` (default
+    ``models`` (default :func:`~sedsabso_jax.identification.candidate_models` of the robot: its
+    :data:`~sedsabso_jax.identification.FRICTION_CANDIDATES`) and ``estimators`` (default
     :data:`ESTIMATOR_CANDIDATES`; those weighting by the torque limits are skipped
     without ``limits``; physically consistent ones count as simpler than the same
     unconstrained) are the grid, simplest first. Every candidate is scored by
     ``validation`` (default phase folds, as in :func:`cross_validate`; a
     :class:`~._splits.Pooled` validation's parts are scored from the same fits:
-    :attr:`~._folds.CrossValidation.part_scores`). ``progress(label, done, total)`` is
+    :attr:`~._cross_validation.CrossValidation.part_scores`). ``progress(label, done, total)`` is
     called after each fit (``total``: candidates x splits)."""
     estimators = ESTIMATOR_CANDIDATES if estimators is None else one_or_more(estimators,
                                                                              Estimator)
@@ -294,7 +297,7 @@ def choose_prior_strength(robot: Robot, data: Data,
                           validation: Validation = PhaseFolds(), limits: Limits = None,
                           progress: ProgressCallback | None = None) -> PriorSelection:
     """Choose how strongly a physically consistent fit is pulled toward the a-priori
-    parameters (``prior_strength`` of :class:`~._estimators.PhysicallyConsistent`; an
+    parameters (``prior_strength`` of :class:`~sedsabso_jax.PhysicallyConsistent`; an
     ``OLS`` or ``WLS`` ``estimator`` is made physically consistent) by ``validation``
     (as in :func:`cross_validate`): every strength in ``strengths`` is validated, and the
     STRONGEST pull whose split-by-split excess over the lowest error is within one

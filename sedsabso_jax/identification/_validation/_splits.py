@@ -2,10 +2,10 @@
 
 A :class:`Validation` cuts the samples of one or several recordings into splits, each a
 set of samples to fit and a set to predict (:class:`Splits`);
-:func:`~._validation.cross_validate` fits and predicts each split, and the mean error over
+:func:`~sedsabso_jax.cross_validate` fits and predicts each split, and the mean error over
 the splits is the validation's score.
 
-- :class:`PhaseFolds`: folds of the motion's phase (:func:`~._folds.phase_folds`). Every
+- :class:`PhaseFolds`: folds of the motion's phase (:func:`~._phase.phase_folds`). Every
   fold is a stretch of the same trajectory, inside the region of joint states the others
   cover: it measures how well a model interpolates, and predicts motions like the one
   fitted (within 11 % in the simulation study, ``benchmarks.extrapolation``).
@@ -29,10 +29,12 @@ import dataclasses
 from collections.abc import Sequence
 from typing import ClassVar
 
+import equinox as eqx
 import numpy as np
 from jaxtyping import ArrayLike, Int
 
 from ...measurements._container import Measurements
+from .._options import as_float
 from ._phase import DEFAULT_FOLDS, phase_folds
 
 #: :class:`SpeedSplits`' default thresholds, as fractions of each joint's peak speed
@@ -63,18 +65,19 @@ class Splits:
         return len(self.train)
 
 
-class Validation(abc.ABC):
+class Validation(eqx.Module):
     """A way to cut recordings into fit-and-predict splits (module docstring): an
-    immutable object carrying its options, checked when built."""
+    immutable object carrying its options, converted and checked when built (an
+    ``equinox.Module``, abstract or final, as the estimators are)."""
 
     #: What the reports call it.
-    kind: ClassVar[str]
+    kind: eqx.AbstractClassVar[str]
     #: The fewest recordings it can split.
     min_recordings: ClassVar[int] = 1
 
     def of(self, recordings: Sequence[Measurements]) -> Validation:
         """The validation to split ``recordings`` by: itself (a recipe such as
-        :class:`~._auto.DefaultValidation` makes one for the recordings)."""
+        :class:`~sedsabso_jax.identification.DefaultValidation` makes one for the recordings)."""
         return self
 
     @abc.abstractmethod
@@ -103,15 +106,14 @@ def _partition(labels: np.ndarray, names: Sequence[str], period: float | None = 
                   tuple(names), labels, period)
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
 class PhaseFolds(Validation):
-    """``folds`` folds of each recording's phase (:func:`~._folds.phase_folds`); fold
+    """``folds`` folds of each recording's phase (:func:`~._phase.phase_folds`); fold
     ``k`` of every recording together is split ``k``."""
 
     folds: int = DEFAULT_FOLDS
     kind: ClassVar[str] = "phase folds"
 
-    def __post_init__(self):
+    def __check_init__(self):
         if not isinstance(self.folds, (int, np.integer)) or isinstance(self.folds, bool) \
                 or self.folds < 2:
             raise ValueError(f"folds must be an integer >= 2, got {self.folds!r}")
@@ -129,21 +131,27 @@ class PhaseFolds(Validation):
                 f"others (a model interpolating inside the fitted motion)")
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
+def _as_labels(value: object) -> object:
+    """Fold labels as an array (anything else as given, for the check to name)."""
+    try:
+        return np.asarray(value)
+    except (TypeError, ValueError):
+        return value
+
+
 class GivenFolds(Validation):
     """Fold labels ``0..K-1`` given by the user, one per sample (of the recordings
     concatenated); each fold is predicted by a fit to the others."""
 
-    labels: Int[ArrayLike, " T"]
+    labels: Int[ArrayLike, " T"] = eqx.field(converter=_as_labels)
     kind: ClassVar[str] = "given folds"
 
-    def __post_init__(self):
-        labels = np.asarray(self.labels)
-        if labels.ndim != 1 or labels.dtype.kind not in "iu" or labels.size == 0 \
-                or labels.min() < 0:
+    def __check_init__(self):
+        labels = self.labels
+        if not isinstance(labels, np.ndarray) or labels.ndim != 1 \
+                or labels.dtype.kind not in "iu" or labels.size == 0 or labels.min() < 0:
             raise ValueError(f"fold labels must be integers >= 0, one per sample, got "
-                             f"shape {labels.shape}")
-        object.__setattr__(self, "labels", labels)
+                             f"shape {np.shape(labels)}")
 
     def splits(self, recordings: Sequence[Measurements]) -> Splits:
         labels = np.asarray(self.labels)
@@ -159,25 +167,21 @@ class GivenFolds(Validation):
         return f"{int(np.max(self.labels)) + 1} given folds, each predicted by a fit to the others"
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
 class SpeedSplits(Validation):
     """One split per joint: fit the samples where that joint moves slower than
     ``fit_below`` of its peak speed, predict those where it moves faster than
     ``predict_above`` (peak: the 99.5 % quantile of ``|qd|`` over all recordings). The
     model is asked to extrapolate each joint's speed by up to ``1 / fit_below``."""
 
-    fit_below: float = FIT_BELOW
-    predict_above: float = PREDICT_ABOVE
+    fit_below: float = eqx.field(default=FIT_BELOW, converter=as_float)
+    predict_above: float = eqx.field(default=PREDICT_ABOVE, converter=as_float)
     kind: ClassVar[str] = "speed splits"
 
-    def __post_init__(self):
+    def __check_init__(self):
         lo, hi = self.fit_below, self.predict_above
-        ok = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (lo, hi))
-        if not (ok and 0 < lo <= hi < 1):
+        if not (isinstance(lo, float) and isinstance(hi, float) and 0 < lo <= hi < 1):
             raise ValueError(f"SpeedSplits needs 0 < fit_below <= predict_above < 1 (fractions "
                              f"of each joint's peak speed), got {lo!r} and {hi!r}")
-        object.__setattr__(self, "fit_below", float(lo))
-        object.__setattr__(self, "predict_above", float(hi))
 
     def splits(self, recordings: Sequence[Measurements]) -> Splits:
         qd = np.concatenate([r.qd for r in recordings])
@@ -201,7 +205,6 @@ class SpeedSplits(Validation):
                 f"motion)")
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
 class RecordingFolds(Validation):
     """Leave one recording out: each recording is predicted by a fit to the others."""
 
@@ -220,7 +223,11 @@ class RecordingFolds(Validation):
         return "each recording predicted by a fit to the others"
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
+def _as_tuple(value: object) -> object:
+    """A sequence as a tuple (anything else as given, for the check to name)."""
+    return tuple(value) if isinstance(value, (list, tuple)) else value
+
+
 class Pooled(Validation):
     """The splits of several validations together: a model is scored on all of them (the
     mean over every split), as new motions are partly like the fitted one (phase folds)
@@ -228,15 +235,15 @@ class Pooled(Validation):
     ``Pooled((PhaseFolds(), SpeedSplits()))``, with :class:`RecordingFolds` for the phase
     folds where there are several recordings."""
 
-    validations: tuple[Validation, ...] = ()
+    validations: tuple[Validation, ...] = eqx.field(default=(), converter=_as_tuple)
     kind: ClassVar[str] = "pooled"
 
-    def __post_init__(self):
-        found = tuple(self.validations)
-        if len(found) < 2 or not all(isinstance(v, Validation) for v in found):
+    def __check_init__(self):
+        found = self.validations
+        if not isinstance(found, tuple) or len(found) < 2 or not all(
+                isinstance(v, Validation) for v in found):
             raise ValueError(f"Pooled needs at least two validations (PhaseFolds(), "
                              f"SpeedSplits(), ...), got {self.validations!r}")
-        object.__setattr__(self, "validations", found)
 
     def splits(self, recordings: Sequence[Measurements]) -> Splits:
         parts = [v.splits(recordings) for v in self.validations]
