@@ -24,7 +24,7 @@ def compress(blocks: Float[np.ndarray, "T n c"]) -> Float[np.ndarray, "n c c"]:
     T, n, c = blocks.shape
     out = np.zeros((n, c, c))
     for j in range(n):
-        R = np.linalg.qr(blocks[:, j, :], mode="r")
+        R = np.asarray(np.linalg.qr(blocks[:, j, :], mode="r"))
         out[j, :R.shape[0]] = R
     return out
 
