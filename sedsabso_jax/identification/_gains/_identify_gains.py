@@ -27,8 +27,10 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Sequence
 
 import numpy as np
+from jaxtyping import ArrayLike, Float
 
 from ..._deprecation import caller_stacklevel
 from ...dynamics._robot import Robot
@@ -130,7 +132,8 @@ def _fitted(model: TorqueModel, first_eq: GainEquations, signals: tuple, motors:
 
 
 def identify_drive_gains(robot: Robot, unloaded: Data, loaded: Data, link: str, mass: float,
-                         com=None, *, model: TorqueModel | None = None,
+                         com: Float[ArrayLike, " 3"] | Sequence[float] | None = None, *,
+                         model: TorqueModel | None = None,
                          method: str = DEFAULT_METHOD, transmission: TransmissionLike = None,
                          urdf: str | os.PathLike[str] | None = None) -> DriveGains:
     """Identify the drive gains from recordings of currents without and with a payload of
