@@ -48,6 +48,8 @@ from .identification._estimators._row_fits import L1 as L1
 from .identification._estimators._row_fits import LevenbergMarquardt as LevenbergMarquardt
 from .identification._fit._identify import Identification as Identification
 from .identification._fit._identify import identify as identify
+from .identification._gains._identify_gains import identify_drive_gains as identify_drive_gains
+from .identification._gains._result import DriveGains as DriveGains
 from .identification._metrics import Metrics as Metrics
 from .identification._metrics import validation_metrics as validation_metrics
 from .identification._model._actuators import Armature as Armature
@@ -105,4 +107,5 @@ __all__ = [
     "PhysicallyConsistent", "validation_metrics", "Metrics", "cross_validate",
     "select_model", "choose_prior_strength", "Validation", "PhaseFolds", "SpeedSplits",
     "RecordingFolds", "GivenFolds", "Pooled", "identify_payload", "Payload",
+    "identify_drive_gains", "DriveGains",
 ]

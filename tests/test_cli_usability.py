@@ -16,7 +16,8 @@ import sedsabso_jax as sj
 from sedsabso_jax import cli
 from sedsabso_jax.cli._config import parse_args
 
-COMMANDS = ("base-parameters", "reproduce", "compare", "identify", "identify-payload")
+COMMANDS = ("base-parameters", "reproduce", "compare", "identify", "identify-payload",
+            "identify-gains")
 
 
 def _status(argv) -> int:

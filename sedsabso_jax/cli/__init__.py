@@ -1,7 +1,8 @@
 """The ``sedsabso-jax`` command: ``main(argv)`` runs it (the console script), and
 ``build_parser()`` is its argument parser. It parses and dispatches only: each command is
-one call of the library (``sedsabso_jax.select_and_identify``, ``sedsabso_jax.reproduce``,
-``sedsabso_jax.compare``)."""
+one call of the library (``sedsabso_jax.select_and_identify``,
+``sedsabso_jax.identify_payload``, ``sedsabso_jax.identify_drive_gains``,
+``sedsabso_jax.reproduce``, ``sedsabso_jax.compare``)."""
 
 from __future__ import annotations
 

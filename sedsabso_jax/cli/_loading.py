@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 from collections.abc import Sequence
 from contextlib import AbstractContextManager
 from typing import TYPE_CHECKING, Any
@@ -29,16 +30,42 @@ def numbers(flag: str, text, n: int):
     return values
 
 
+def drive_gains(args: argparse.Namespace, n: int) -> list[float] | None:
+    """``--drive-gains``: ``n`` comma-separated numbers, or a JSON file ``identify-gains
+    --json`` wrote (its ``drive_gains``, recorded on the side ``--motor-side`` says)."""
+    import json
+
+    text = args.drive_gains
+    if text is None or not (text.lower().endswith(".json") or os.path.isfile(text)):
+        return numbers("--drive-gains", text, n)
+    from ..identification._gains._result import read_gains
+
+    try:
+        with open(text, encoding="utf-8") as f:
+            doc = json.load(f)
+    except FileNotFoundError:
+        raise FileNotFoundError(f"--drive-gains {text}: no such file") from None
+    except (OSError, ValueError) as err:
+        raise ValueError(f"--drive-gains {text}: not a JSON file ({err})") from None
+    gains = read_gains(doc, n, f"--drive-gains {text}")
+    side = bool(doc.get("motor_side", False))
+    if side != bool(args.motor_side):
+        raise ValueError(f"--drive-gains {text}: the gains are the "
+                         f"{'motors' if side else 'joints'}' (identify-gains "
+                         f"{'with' if side else 'without'} --motor-side): "
+                         f"{'give' if side else 'leave out'} --motor-side")
+    return gains.tolist()
+
+
 def transmission_of(args: argparse.Namespace, n: int) -> Transmission | None:
     """The motors' transmission from --gear-ratios, --coupling, --position-offsets and
-    --drive-gains, or None."""
+    --drive-gains (with --motor-side), or None."""
     from ..measurements._transmission import Transmission
 
     ratios = numbers("--gear-ratios", args.gear_ratios, n)
     if ratios is None:
         for flag, value in (("--motor-side", args.motor_side), ("--coupling", args.coupling),
-                            ("--position-offsets", args.position_offsets),
-                            ("--drive-gains", args.drive_gains)):
+                            ("--position-offsets", args.position_offsets)):
             if value:
                 raise ValueError(f"{flag} needs --gear-ratios (one per joint, motor turns per "
                                  f"joint turn)")
@@ -55,7 +82,7 @@ def transmission_of(args: argparse.Namespace, n: int) -> Transmission | None:
     return Transmission.from_gear_ratios(
         ratios, coupling=coupling, offset=numbers("--position-offsets",
                                                   args.position_offsets, n),
-        drive_gains=numbers("--drive-gains", args.drive_gains, n))
+        drive_gains=drive_gains(args, n) if args.motor_side else None)
 
 
 def urdf_source(robot: str) -> AbstractContextManager[Any]:
@@ -70,21 +97,33 @@ def urdf_source(robot: str) -> AbstractContextManager[Any]:
 
 
 def loading(args: argparse.Namespace, n_joints: int) -> dict[str, Any]:
-    """The options of ``load_measurements`` that the loading flags give."""
-    return dict(n_joints=n_joints, cutoff_hz=args.cutoff_hz,
-                filter_torques=args.filter_torques, downsample=args.downsample,
-                resample_hz=args.resample_hz, trim_edges=not args.keep_edges)
+    """The options of ``load_measurements`` that the loading flags give, and the joint-side
+    ``drive_gains`` (--drive-gains without --motor-side) that :func:`load_all` applies."""
+    out = dict(n_joints=n_joints, cutoff_hz=args.cutoff_hz,
+               filter_torques=args.filter_torques, downsample=args.downsample,
+               resample_hz=args.resample_hz, trim_edges=not args.keep_edges)
+    if getattr(args, "drive_gains", None) is not None and not args.motor_side:
+        out["drive_gains"] = drive_gains(args, n_joints)
+    return out
 
 
 def load_all(paths: Sequence[str], load: dict[str, Any], motor_side: bool,
              transmission: Transmission | None) -> list[Measurements]:
-    """The files at ``paths``, loaded with ``load`` (:func:`loading`), on the joint side."""
+    """The files at ``paths``, loaded with ``load`` (:func:`loading`), on the joint side:
+    motor side through ``transmission``, or their torque columns times the joint-side
+    ``drive_gains`` of ``load``."""
+    from ..measurements._container import Measurements
     from ..measurements._load import load_measurements
 
-    data = [load_measurements(path, **load) for path in paths]
+    options = dict(load)
+    gains = options.pop("drive_gains", None)
+    data = [load_measurements(path, **options) for path in paths]
     if motor_side:
         assert transmission is not None  # transmission_of: --motor-side needs --gear-ratios
         data = [transmission.to_joint_side(d) for d in data]
+    elif gains is not None:
+        data = [Measurements(d.times, d.q, d.qd, d.qdd, d.tau * gains, source=d.source,
+                             info=dict(d.info, drive_gains=list(gains))) for d in data]
     return data
 
 
@@ -125,5 +164,7 @@ def add_motors(parser: argparse.ArgumentParser, files: str) -> None:
                         "6:5=32")
     motors.add_argument("--position-offsets", metavar="LIST", default=None,
                         help="joint position of each encoder zero [rad], comma-separated")
-    motors.add_argument("--drive-gains", metavar="LIST", default=None,
-                        help="motor torque per unit of recorded current, one per motor")
+    motors.add_argument("--drive-gains", metavar="LIST|FILE.json", default=None,
+                        help="torque per unit of recorded current, one per motor (with "
+                        "--motor-side) or joint (without: the torque columns hold currents), "
+                        "comma-separated, or the JSON file 'identify-gains --json' wrote")

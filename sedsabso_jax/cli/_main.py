@@ -5,6 +5,9 @@
   (:mod:`._identify`: one call of the library's ``select_and_identify``);
 * ``sedsabso-jax identify-payload --robot ... --loaded ... --link ...``: a payload's
   inertial parameters (:mod:`._payload`: one call of the library's ``identify_payload``);
+* ``sedsabso-jax identify-gains --robot ... --data ... --loaded ... --link ... --mass ...``:
+  drive gains from a weighed payload (:mod:`._gains`: one call of the library's
+  ``identify_drive_gains``);
 * ``sedsabso-jax compare``: optimisers compared on BBOB and identification problems
   (:mod:`._compare`);
 * ``sedsabso-jax base-parameters --robot PATH.urdf``: a robot's base-parameter table
@@ -29,6 +32,7 @@ from .._version import __version__
 from . import _base_parameters as base_parameters_command
 from . import _compare as compare_command
 from . import _config as config
+from . import _gains as gains_command
 from . import _identify as identify_command
 from . import _payload as payload_command
 from ._common import (
@@ -125,6 +129,7 @@ def build_parser() -> argparse.ArgumentParser:
     compare_command.add_parser(sub)
     identify_command.add_parser(sub)
     payload_command.add_parser(sub)
+    gains_command.add_parser(sub)
     return parser
 
 
@@ -177,7 +182,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
-    if args.command in ("reproduce", "identify", "identify-payload", "compare"):
+    if args.command in ("reproduce", "identify", "identify-payload", "identify-gains",
+                        "compare"):
         _enable_compilation_cache()
     try:
         with warnings.catch_warnings():

@@ -6,7 +6,7 @@ the estimators ``OLS``, ``WLS``, ``L1``, ``LevenbergMarquardt``, ``BoxSearch``,
 ``IdentificationReport``, ``cross_validate``, ``select_model``, ``choose_prior_strength``,
 ``validation_metrics``, ``Metrics``, the validations ``Validation``, ``PhaseFolds``,
 ``SpeedSplits``, ``RecordingFolds``, ``GivenFolds``, ``Pooled``; ``identify_payload``,
-``Payload``).
+``Payload``; ``identify_drive_gains``, ``DriveGains``).
 
 Here: what writing a torque-model term needs (``AbstractTerm``, ``AbstractScale``,
 ``Signals``, ``Nonlinear``, ``diagonal``), how a fit searches a model's nonlinear
@@ -24,8 +24,8 @@ terms), ``_search`` (how a few nonlinear parameters are searched), ``_estimators
 the linear values are fitted to rows), ``_fit`` (how a model is fitted: its terms'
 stages, the compiled search problem, ``identify``), ``_validation`` (how well a fit
 predicts what it was not fitted to, and the choice of a model by it), ``_payload`` (a
-body fixed to a link) and ``_default`` (what the command does by default, and its
-report)."""
+body fixed to a link), ``_gains`` (drive gains from a payload of known mass) and
+``_default`` (what the command does by default, and its report)."""
 
 from __future__ import annotations
 
@@ -42,6 +42,8 @@ from ._estimators._least_squares import AbstractLeastSquares as AbstractLeastSqu
 from ._fit._fit import SETTLE_RTOL as SETTLE_RTOL
 from ._fit._fit import Fitted as Fitted
 from ._fit._projection import Projection as Projection
+from ._gains._result import CALIBRATED_STD as CALIBRATED_STD
+from ._gains._solvers import GAIN_METHODS as GAIN_METHODS
 from ._metrics import nrms_over_limits as nrms_over_limits
 from ._model._candidates import FRICTION_CANDIDATES as FRICTION_CANDIDATES
 from ._model._candidates import candidate_models as candidate_models
@@ -82,5 +84,6 @@ __all__ = [
     "AbstractScale", "Signals", "Nonlinear", "diagonal", "Fitted", "SETTLE_RTOL",
     "parse_friction", "figure_torques", "extrapolation", "Extrapolation", "Splits",
     "PAYLOAD_PARAMETERS", "Projection", "AbstractSearch", "CoordinateSearch",
-    "PopulationSearch", "LeastSquaresSearch", "dahl_state", "increments",
+    "PopulationSearch", "LeastSquaresSearch", "dahl_state", "increments", "GAIN_METHODS",
+    "CALIBRATED_STD",
 ]

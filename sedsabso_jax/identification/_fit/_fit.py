@@ -106,8 +106,12 @@ def fit(estimator: Estimator, model: TorqueModel, samples: Samples,
     report: dict = {}
     readers = [t.name for t in model.terms if t.waiting or t.iterates]
     if model.waiting:
-        first = linear(OLS(), model.without_waiting(), samples, None, False)
-        model = model.reading(first.x, only=lambda term: term.waiting)
+        without = model.without_waiting()
+        first = dict(zip(without.names, linear(OLS(), without, samples, None, False).x))
+        # the first fit's values by name: a body term after the waiting ones (a payload)
+        # sits elsewhere in the model with them
+        model = model.reading(np.array([first.get(n, 0.0) for n in model.names]),
+                              only=lambda term: term.waiting)
     if model.nonlinear():
         model, report["searched"] = search(estimator, model, samples, limits)
     out = linear(estimator, model, samples, limits, warn)

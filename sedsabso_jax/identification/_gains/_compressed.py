@@ -1,0 +1,52 @@
+"""Each joint's rows compressed to their triangular factor, once, and the standard
+deviations of compressed rows.
+
+The equations have many samples and few unknowns: ``T`` rows per joint (30,000 on the
+KUKA's 25 s) against about 100 columns. A joint's rows ``B_j`` (its columns and
+right-hand side side by side) factor as ``B_j = Q_j R_j`` (a thin QR, once), and
+``|B_j v| = |R_j v|`` for every ``v``: every fit of :mod:`._solvers` and
+:mod:`._likelihood` (weighted least squares, Gautier's weights, total least squares,
+each Gauss-Newton step) then works on the ``R_j``, exactly, at the cost of a few
+hundred rows (Golub & Van Loan, *Matrix Computations*, Sec. 5.3).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from jaxtyping import Float
+
+from .._fit._uncertainty import NULL_COMPONENT, RANK_TOLERANCE
+
+
+def compress(blocks: Float[np.ndarray, "T n c"]) -> Float[np.ndarray, "n c c"]:
+    """``R_j`` of each joint's rows ``blocks[:, j, :]`` (zero rows below ``T`` when
+    there are fewer samples than columns)."""
+    T, n, c = blocks.shape
+    out = np.zeros((n, c, c))
+    for j in range(n):
+        R = np.asarray(np.linalg.qr(blocks[:, j, :], mode="r"))
+        out[j, :R.shape[0]] = R
+    return out
+
+
+def std(W: Float[np.ndarray, "m d"], residual2: float, rows: int,
+        G: Float[np.ndarray, "k d"]) -> Float[np.ndarray, " k"]:
+    """The standard deviation of each row's function ``G x`` from compressed rows ``W``
+    (``W^T W`` that of the ``rows`` rows they stand for) and the rows' squared residual
+    norm ``residual2``: ``s^2 g (W^T W)^+ g^T`` with ``s^2 = residual2 / (rows - rank)``,
+    as :func:`~.._fit._uncertainty.function_std` (columns scaled to unit norm; ``inf``
+    where ``g`` has a part the rows do not determine)."""
+    norms = np.linalg.norm(W, axis=0)
+    live = norms > RANK_TOLERANCE * norms.max(initial=0.0)
+    scale = np.where(live, norms, 1.0)
+    _, s, Vt = np.linalg.svd(np.where(live, W / scale, 0.0), full_matrices=False)
+    rank = int(np.sum(s > RANK_TOLERANCE * s[0])) if s.size and s[0] > 0 else 0
+    g = np.atleast_2d(G) / scale
+    if rows <= rank:
+        return np.full(g.shape[0], np.nan)
+    variance = float(residual2) / (rows - rank)
+    spread = (Vt[:rank] @ g.T) / s[:rank, None]
+    out = np.sqrt(variance * np.sum(spread ** 2, axis=0))
+    null = np.linalg.norm(Vt[rank:] @ g.T, axis=0)
+    size = np.maximum(np.linalg.norm(g, axis=1), 1e-300)
+    return np.where(null > NULL_COMPONENT * size, np.inf, out)

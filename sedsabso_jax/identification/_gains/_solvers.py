@@ -1,0 +1,179 @@
+"""The ways to solve the equations of :mod:`._equations`.
+
+Each joint's rows are divided by its sigma, Gautier's two-step estimate (the RMS of the
+joint's residual after an unweighted fit, then once more after the fit so weighted;
+compressed once, :mod:`._compressed`). On the weighted rows ``W theta ~ b``:
+
+- ``"ordinary"``: least squares (minimum norm, columns scaled to unit norm). The currents
+  are in the gains' columns: an errors-in-variables fit, whose gains the currents' noise
+  biases toward zero (:mod:`._likelihood`).
+- ``"total"``: total least squares of the homogeneous system ``[W, -b] [theta; 1] = 0``
+  (Gautier & Briot 2014; FIGAROH's drive-gain step): the right singular vector of the
+  smallest singular value of the column-scaled ``[W, -b]``, normalised so that the known
+  payload's coefficient is 1. It treats every column as noisy, the regressor's as much as
+  the currents'.
+- ``"likelihood"``: the maximum likelihood for noise in the currents (:mod:`._likelihood`),
+  from the total least squares' estimate.
+- ``"physical"``: the maximum likelihood's gains, then the model's values at those gains
+  over the payloads a real body can be (its pseudo-inertia positive semidefinite,
+  Wensing, Kim & Slotine, IEEE RA-L 2018) with its mass (and centre of mass) as known, and
+  the model's terms' coefficients ``>= 0`` where a physical body has them so (a conic
+  programme, Clarabel through cvxpy).
+
+The standard deviations are those of the least squares (or of the likelihood's
+linearisation) at the returned estimate (:func:`~._compressed.std`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+
+from ...dynamics._inertia import pseudo_inertia
+from .._estimators._physical import PSD_MARGIN, RIDGE
+from .._fit._uncertainty import RANK_TOLERANCE
+from .._payload._least_squares import LinearFit, pseudo_inertia_map
+from ._compressed import compress
+from ._equations import GainEquations, payload_columns
+from ._likelihood import gain_map, maximum_likelihood
+
+#: The ways to solve the equations (module docstring).
+GAIN_METHODS = ("ordinary", "total", "likelihood", "physical")
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Solution:
+    """The unknowns ``theta`` (the free model values, then the gains), and for their
+    standard deviations the weighted rows' Jacobian ``W`` and ``residual``, compressed
+    (:mod:`._compressed`), the ``rows`` they stand for, and ``G``, the derivatives of
+    ``theta`` by ``W``'s unknowns; the solver's ``report``."""
+
+    theta: np.ndarray
+    W: np.ndarray
+    residual: np.ndarray
+    rows: int
+    G: np.ndarray
+    report: dict
+
+
+def compressed_rows(eq: GainEquations) -> tuple[np.ndarray, int, np.ndarray]:
+    """``(R, T, acting)``: each joint's rows ``[X, b]`` (:attr:`GainEquations.rows`)
+    compressed, the samples, and the unknowns acting on each joint."""
+    X, b = eq.rows
+    acting = np.count_nonzero(np.any(X != 0, axis=0), axis=-1)
+    return compress(np.concatenate([X, b[..., None]], -1)), X.shape[0], acting
+
+
+def weighted(R: np.ndarray, sigma: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The compressed rows ``R`` divided by each joint's ``sigma``: ``(W, b)``."""
+    u = R.shape[-1] - 1
+    return ((R[..., :u] / sigma[:, None, None]).reshape(-1, u),
+            (R[..., u] / sigma[:, None]).reshape(-1))
+
+
+def gautier(R: np.ndarray, T: int, acting: np.ndarray) -> np.ndarray:
+    """Each joint's sigma, Gautier's two-step estimate (module docstring)."""
+    u = R.shape[-1] - 1
+    sigma = np.ones(R.shape[0])
+    for _ in range(2):
+        x = LinearFit.of(*weighted(R, sigma)).x
+        r2 = np.sum((R[..., :u] @ x - R[..., u]) ** 2, axis=-1)
+        sigma = np.sqrt(r2 / np.maximum(T - acting, 1))
+        sigma = np.where(sigma > 0, sigma, max(float(sigma.max()), 1e-300))
+    return sigma
+
+
+def total(W: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Total least squares of ``W theta ~ b`` (module docstring), on the columns scaled to
+    unit norm and, where ``W`` is rank deficient, on the combinations of them it
+    determines (the others are left at 0, as the minimum-norm least squares leaves them)."""
+    norms = np.linalg.norm(W, axis=0)
+    scale = np.where(norms > RANK_TOLERANCE * norms.max(initial=0.0), norms, np.inf)
+    _, sv, Vt = np.linalg.svd(W / scale, full_matrices=False)
+    rank = int(np.sum(sv > RANK_TOLERANCE * sv[0])) if sv.size and sv[0] > 0 else 0
+    basis = Vt[:rank].T  # the determined combinations of the scaled columns
+    # in an orthonormal basis of what they determine the scaled columns' perturbations
+    # keep their norm; b scaled to unit norm
+    z_norms = np.r_[np.ones(rank), max(float(np.linalg.norm(b)), 1e-300)]
+    Zs = np.column_stack([(W / scale) @ basis, -b]) / z_norms
+    unit = np.linalg.svd(Zs, full_matrices=False)[2][-1]
+    if not abs(unit[-1]) > 1e-8:
+        raise ValueError("total least squares: the smallest singular vector leaves out the "
+                         "known payload: the payload's mass does not fix the scale")
+    v = unit / z_norms
+    return (basis @ (v[:-1] / v[-1])) / scale
+
+
+def physical(eq: GainEquations, fit: LinearFit) -> tuple[np.ndarray, dict]:
+    """The least squares of ``fit``'s rows over consistent payloads of the known mass and
+    nonnegative term coefficients (module docstring): ``(theta, solver report)``."""
+    import cvxpy as cp
+
+    free, u = eq.free, fit.scale.size
+    position = {int(c): i for i, c in enumerate(free)}
+    S, s0 = np.zeros((10, u)), np.zeros(10)
+    for row, column in enumerate(payload_columns(eq.model)):
+        if int(column) in position:
+            S[row, position[int(column)]] = 1.0
+        else:
+            s0[row] = eq.known[list(eq.fixed).index(column)]
+    nonneg = [position[int(c)] for c in np.flatnonzero(eq.model.nonnegative)
+              if int(c) in position]
+    if np.all(fit.x[nonneg] >= 0) and np.linalg.eigvalsh(
+            pseudo_inertia(S @ fit.x + s0)).min() >= PSD_MARGIN:
+        return fit.x, {"solver": "none (the least-squares solution is consistent)",
+                       "status": "optimal"}
+    scale = fit.scale
+    M = fit.s[:, None] * fit.Vt  # ||W theta - b||^2 = ||M (scale theta) - U^T b||^2 + const
+    norm = max(float(np.linalg.norm(fit.Ub)), 1e-300)
+    ridge = np.sqrt(RIDGE * float(np.sum(M ** 2)) / u)
+    xs = cp.Variable(u, name="theta_scaled")
+    J = cp.Variable((4, 4), symmetric=True, name="payload")
+    theta = cp.multiply(1.0 / scale, xs)
+    constraints = [J - PSD_MARGIN * np.eye(4) >> 0,
+                   S @ theta + s0 == pseudo_inertia_map() @ cp.hstack(
+                       [J[i, j] for i in range(4) for j in range(4)])]
+    if nonneg:
+        constraints.append(xs[nonneg] >= 0)
+    objective = cp.norm(cp.hstack([(M @ xs - fit.Ub) / norm,
+                                   ridge * (xs - fit.x * scale) / norm]), 2)
+    problem = cp.Problem(cp.Minimize(objective), constraints)
+    t0 = time.perf_counter()
+    try:
+        problem.solve(solver=cp.CLARABEL)
+    except cp.error.SolverError as err:
+        raise RuntimeError(f"drive gains: the conic solver failed: {err}") from None
+    if problem.status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
+        raise RuntimeError(f"drive gains: Clarabel ended with status {problem.status!r}; no "
+                           f"consistent payload of the given mass was found")
+    return np.asarray(xs.value, dtype=float) / scale, {
+        "solver": "Clarabel (cvxpy)", "status": str(problem.status),
+        "iterations": int(problem.solver_stats.num_iters or 0),
+        "seconds": time.perf_counter() - t0}
+
+
+def solve(eq: GainEquations, method: str) -> Solution:
+    """The equations ``eq`` solved by ``method`` (one of :data:`GAIN_METHODS`)."""
+    if method not in GAIN_METHODS:
+        raise ValueError(f"method must be one of {GAIN_METHODS}, got {method!r}")
+    R, T, acting = compressed_rows(eq)
+    sigma = gautier(R, T, acting)
+    W, b = weighted(R, sigma)
+    identity = np.eye(W.shape[1])
+    rows = T * R.shape[0]
+    report: dict = {"sigma": sigma.tolist()}
+    if method == "ordinary":
+        theta = LinearFit.of(W, b).x
+        return Solution(theta, W, W @ theta - b, rows, identity, report)
+    theta = total(W, b)
+    if method == "total":
+        return Solution(theta, W, W @ theta - b, rows, identity, report)
+    problem, x, h, s, found = maximum_likelihood(eq, theta)
+    report = {**report, **found}
+    if method == "physical":
+        x, solved = physical(eq, LinearFit.of(*problem.rows(h, s)))
+        report["solver"] = solved
+    return Solution(np.r_[x, 1.0 / h], problem.jacobian(x, h, s), problem.residual(x, h, s),
+                    problem.samples * h.size, gain_map(x.size, h), report)
