@@ -98,7 +98,7 @@ def test_the_coordinate_grid_keeps_the_minimum_inside():
     later grid spans a step either side of the best, so the minimum stays inside and is
     found to the last grid's step."""
     problem = Asymmetric(jnp.full(3, 0.1))
-    found = CoordinateSearch().search(problem, np.zeros(3), LOWER, UPPER)
+    found = CoordinateSearch(points=9, sweeps=4).search(problem, np.zeros(3), LOWER, UPPER)
     np.testing.assert_allclose(found.u, 0.1, atol=0.02)
 
 

@@ -19,7 +19,8 @@ from ...dynamics._robot import Robot
 from .._estimators._estimator import Estimator, Limits, ProgressCallback
 from .._fit._identify import identify
 from .._model._candidates import candidate_models
-from .._model._torque_model import TorqueModel, model_of
+from .._model._checks import model_of
+from .._model._torque_model import TorqueModel
 from .._options import one_or_more
 from .._recordings import Data, recordings_of
 from .._validation._selection import (

@@ -35,7 +35,8 @@ from .._estimators._estimator import (
 )
 from .._estimators._least_squares import OLS
 from .._metrics import nrms_over_limits
-from .._model._torque_model import TorqueModel, model_of, regrouped_message
+from .._model._checks import model_of, regrouped_message
+from .._model._torque_model import TorqueModel
 from .._recordings import Data, is_several, recordings_of, stacked
 from ._fit import fit as fit_model
 from ._samples import Samples

@@ -53,7 +53,8 @@ class Recipe:
     computes (the Coulomb columns where a term reshapes them, then the terms
     ``terms``), the moved columns' (block column, joint) pairs, and for each joint whose
     row a moved column reaches, the unmoved columns nonzero on that row (``rows``:
-    ``(joint, columns)``; a joint's own friction meets few of the robot's columns).
+    ``(joint, columns)``, every joint; a joint's own friction meets few of the robot's
+    columns).
     Equal (and hashed) by what the compiled code reads, so that problems of one model
     structure share a compilation."""
 
@@ -101,12 +102,12 @@ class Projection(eqx.Module):
     rigid: Array | None
     weights: Float[Array, " n"]
     mask: Float[Array, " T"]
-    A: Float[Array, "T n p"]        # the columns no trial moves, weighted, scaled, masked
-    A_rows: tuple                   # per joint of recipe.rows, A at its row and columns
+    A_rows: tuple                   # per joint (recipe.rows): the columns no trial moves
+                                    # that reach its row, weighted, scaled, masked
     b: Float[Array, "T n"]          # the torques, weighted, masked
-    AtA: Float[Array, "p p"]
-    Atb: Float[Array, " p"]
-    btb: Float[Array, ""]
+    P: Float[Array, "p p"]          # (A^T A + ridge)^-1 of the unmoved columns
+    PAtb: Float[Array, " p"]        # their least-squares values without the moved ones
+    floor: Float[Array, ""]         # b^T b - b^T A P A^T b: their residual
     rows: Float[Array, ""]          # the weighted rows fitted (samples x joints)
     recipe: Recipe = eqx.field(static=True)
 
@@ -134,14 +135,14 @@ class Projection(eqx.Module):
             raise ValueError(f"the torque model {model.friction!r} has no parameters to "
                              f"search")
         root = samples.root
-        u0 = np.log(np.concatenate([f.values for _, f in found]))
         # kept for the other splits where the whole's rows of this model are (a model
         # the validation fits unchanged on every split)
         Y0 = root.rows(model, every_column=True, cache=root.has_rows(model))
-        Y1 = root.rows(model.with_nonlinear(np.exp(u0 + PROBE_STEP)), every_column=True,
-                       cache=False)
-        moved = np.any(Y0 != Y1, axis=(0, 1))
-        recipe = _recipe(model, moved, (Y0 != 0) | (Y1 != 0))
+        # which columns move, and the recording's signals, once per structure of model
+        moved, recipe = root.kept(("moved", model.structure), model.base,
+                                  lambda: _moved(model, root, Y0))
+        shared = root.kept(("signals", model.structure), model.base,
+                           lambda: _signals(model, root))
         T = root.q.shape[0]
         mask = np.zeros(T)
         mask[np.arange(T) if samples.keep is None else samples.keep] = 1.0
@@ -152,17 +153,13 @@ class Projection(eqx.Module):
         scale = np.where(scale > 0, scale, 1.0)
         A, M = A / scale, M / scale
         b = root.tau * w * mask[:, None]
-        rigid = model.signals(root.q, root.qd, root.qdd, root.recording,
-                              root.base_rows(model)).rigid
-        steps = Signals(root.q, root.qd, root.qdd, root.recording, None).increments()
-        return cls(jnp.asarray(root.q), jnp.asarray(root.qd), jnp.asarray(root.qdd),
-                   None if root.recording is None else jnp.asarray(root.recording),
-                   tuple(jnp.asarray(a) for a in steps),
-                   None if rigid is None else jnp.asarray(rigid), jnp.asarray(w),
-                   jnp.asarray(mask), jnp.asarray(A),
+        AtA, Atb = M.T @ M, M.T @ b.reshape(-1)
+        P = np.linalg.inv(AtA + RIDGE * np.max(np.diag(AtA)) * np.eye(len(AtA)))
+        PAtb = P @ Atb
+        return cls(*shared, jnp.asarray(w), jnp.asarray(mask),
                    tuple(jnp.asarray(A[:, j][:, list(cols)]) for j, cols in recipe.rows),
-                   jnp.asarray(b), jnp.asarray(M.T @ M), jnp.asarray(M.T @ b.reshape(-1)),
-                   jnp.asarray(float(b.reshape(-1) @ b.reshape(-1))),
+                   jnp.asarray(b), jnp.asarray(P), jnp.asarray(PAtb),
+                   jnp.asarray(float(b.reshape(-1) @ b.reshape(-1) - Atb @ PAtb)),
                    jnp.asarray(float(mask.sum() * model.robot.n_joints)), recipe)
 
     def moving(self, u: Float[Array, " k"]) -> Float[Array, "T K"]:
@@ -180,15 +177,19 @@ class Projection(eqx.Module):
         V = C[:, joints, np.asarray(r.pair_column)]
         return V * self.weights[joints] * self.mask[:, None]
 
-    def _normal(self, u):
-        """The scaled normal equations ``G x = h`` at ``u``, the moved columns' scale and
-        their values: the cross products of each joint's row with its few columns."""
+    def _cross(self, u):
+        """The moved columns' cross products at ``u``, scaled to unit norm: with the
+        unmoved columns ``A^T C``, with themselves ``C^T C``, with the torques ``C^T b``;
+        the scale, and the moved columns' values (each joint's row with its few
+        columns)."""
         r = self.recipe
         V = self.moving(u)
         joints = np.asarray(r.pair_joint)
         blocks, rows, cols, gram, gi, gj = [], [], [], [], [], []
         for (j, columns), Aj in zip(r.rows, self.A_rows):
             pairs = np.flatnonzero(joints == j)
+            if not pairs.size:  # no moved column reaches this row
+                continue
             Vj = V[:, pairs]
             blocks.append((Aj.T @ Vj).reshape(-1))
             rows.append(np.repeat(columns, len(pairs)))
@@ -196,7 +197,7 @@ class Projection(eqx.Module):
             gram.append((Vj.T @ Vj).reshape(-1))
             gi.append(np.repeat(pairs, len(pairs)))
             gj.append(np.tile(pairs, len(pairs)))
-        K, p = len(joints), self.AtA.shape[0]
+        K, p = len(joints), self.P.shape[0]
         AtV = jnp.zeros((p, K)).at[np.concatenate(rows), np.concatenate(cols)].set(
             jnp.concatenate(blocks))
         VtV = jnp.zeros((K, K)).at[np.concatenate(gi), np.concatenate(gj)].set(
@@ -207,22 +208,26 @@ class Projection(eqx.Module):
         Ctb = S.T @ jnp.sum(V * self.b[:, joints], axis=0)
         norms = jnp.sqrt(jnp.diag(CtC))
         c = 1.0 / jnp.where(norms > 0, norms, 1.0)
-        G = jnp.block([[self.AtA, AtC * c], [(AtC * c).T, CtC * jnp.outer(c, c)]])
-        h = jnp.concatenate([self.Atb, Ctb * c])
-        return G, h, c, V
+        return AtC * c, CtC * jnp.outer(c, c), Ctb * c, c, V
 
-    def _solve(self, G, h):
-        """The normal equations' solution (Cholesky; a :data:`RIDGE` keeps them
-        positive definite)."""
-        ridge = RIDGE * jnp.max(jnp.diag(G))
-        factor = jax.scipy.linalg.cho_factor(G + ridge * jnp.eye(G.shape[0]))
-        return jax.scipy.linalg.cho_solve(factor, h)
+    def _reduced(self, u):
+        """The normal equations reduced to the moved columns (the unmoved ones eliminated
+        through :attr:`P`, their inverse Gram matrix, formed once): ``S y = g`` with
+        ``S = C^T C - C^T A P A^T C`` (plus :data:`RIDGE`), ``g = C^T b - C^T A P A^T
+        b``, and ``Z = P A^T C``."""
+        AtC, CtC, Ctb, c, V = self._cross(u)
+        Z = self.P @ AtC
+        S = CtC - AtC.T @ Z
+        S = S + RIDGE * jnp.max(jnp.diag(CtC)) * jnp.eye(S.shape[0])
+        g = Ctb - AtC.T @ self.PAtb
+        y = jax.scipy.linalg.cho_solve(jax.scipy.linalg.cho_factor(S), g)
+        return y, g, Z, c, V
 
     def loss(self, u: Float[Array, " k"]) -> Float[Array, ""]:
         """The weighted residual's mean square over the samples fitted, the linear
         values solved (module docstring)."""
-        G, h, _, _ = self._normal(u)
-        return (self.btb - self._solve(G, h) @ h) / self.rows
+        y, g, _, _, _ = self._reduced(u)
+        return (self.floor - y @ g) / self.rows
 
     @staticmethod
     def fitness(u: Float[Array, " k"], problem: Projection) -> Float[Array, ""]:
@@ -234,13 +239,36 @@ class Projection(eqx.Module):
     def residual(self, u: Float[Array, " k"]) -> Float[Array, " N"]:
         """The weighted residual ``(T n,)`` at ``u``, the linear values solved (zero on
         the samples not fitted); its mean square over those is :meth:`loss`."""
-        G, h, c, V = self._normal(u)
-        x = self._solve(G, h)
-        p = self.A.shape[-1]
+        y, _, Z, c, V = self._reduced(u)
+        xa = self.PAtb - Z @ y  # the unmoved columns' values
         r = self.recipe
-        xc = (x[p:] * c)[r.column_of_pair]
-        fitted = (self.A @ x[:p]).at[:, np.asarray(r.pair_joint)].add(V * xc)
+        xc = (y * c)[r.column_of_pair]
+        fitted = jnp.stack([Aj @ xa[np.asarray(columns, dtype=int)]
+                            for (_, columns), Aj in zip(r.rows, self.A_rows)], -1)
+        fitted = fitted.at[:, np.asarray(r.pair_joint)].add(V * xc)
         return (fitted - self.b).reshape(-1) * jnp.sqrt(self.b.size / self.rows)
+
+
+def _moved(model: TorqueModel, root: Samples, Y0: np.ndarray) -> tuple[np.ndarray, Recipe]:
+    """Which of ``model``'s every columns its nonlinear parameters move (its rows ``Y0``
+    against those with the parameters moved by :data:`PROBE_STEP`), and the recipe."""
+    u0 = np.log(np.concatenate([f.values for _, f in model.nonlinear()]))
+    Y1 = root.rows(model.with_nonlinear(np.exp(u0 + PROBE_STEP)), every_column=True,
+                   cache=False)
+    moved = np.any(Y0 != Y1, axis=(0, 1))
+    return moved, _recipe(model, moved, (Y0 != 0) | (Y1 != 0))
+
+
+def _signals(model: TorqueModel, root: Samples) -> tuple:
+    """The whole recordings' signals a trial's columns read, as JAX arrays: positions,
+    velocities, accelerations, recordings, increments, rigid-body rows."""
+    rigid = model.signals(root.q, root.qd, root.qdd, root.recording,
+                          root.base_rows(model)).rigid
+    steps = Signals(root.q, root.qd, root.qdd, root.recording, None).increments()
+    return (jnp.asarray(root.q), jnp.asarray(root.qd), jnp.asarray(root.qdd),
+            None if root.recording is None else jnp.asarray(root.recording),
+            tuple(jnp.asarray(a) for a in steps),
+            None if rigid is None else jnp.asarray(rigid))
 
 
 def _recipe(model: TorqueModel, moved: np.ndarray, nonzero: np.ndarray) -> Recipe:
@@ -267,6 +295,6 @@ def _recipe(model: TorqueModel, moved: np.ndarray, nonzero: np.ndarray) -> Recip
                 pair_joint.append(int(j))
     on_row = np.any(nonzero[:, :, ~moved], axis=0)  # (n, unmoved columns)
     rows = tuple((j, tuple(int(c) for c in np.flatnonzero(on_row[j])))
-                 for j in sorted(set(pair_joint)))
+                 for j in range(model.robot.n_joints))
     return Recipe(model, coulomb, tuple(terms), tuple(pair_column), tuple(pair_joint),
                   int(moved.sum()), rows)

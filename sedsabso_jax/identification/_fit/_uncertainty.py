@@ -63,11 +63,14 @@ def relative_std_percent(std: Float[np.ndarray, " d"], values: Float[np.ndarray,
 def std_of_columns(J: Float[np.ndarray, "m d"], s2: float, rtol: float = 1e-10
                    ) -> Float[np.ndarray, " d"]:
     """Each parameter's standard deviation ``sqrt(s2 diag((J^T J)^-1))`` from the SVD of
-    ``J`` with unit-norm columns: ``inf`` for a parameter with a part in a direction the
-    rows do not determine (a singular value below ``rtol`` of the largest)."""
+    ``J`` with unit-norm columns (of its triangular factor: the same singular values and
+    directions, from a blocked QR of the many rows): ``inf`` for a parameter with a part
+    in a direction the rows do not determine (a singular value below ``rtol`` of the
+    largest)."""
     norms = np.linalg.norm(J, axis=0)
     scale = np.where(norms > 0, norms, 1.0)
-    _, sv, Vt = np.linalg.svd(J / scale, full_matrices=False)
+    R = np.linalg.qr(J / scale, mode="r") if J.shape[0] > J.shape[1] else J / scale
+    _, sv, Vt = np.linalg.svd(R, full_matrices=False)
     ok = sv > rtol * sv.max()
     var = (Vt[ok] ** 2 / sv[ok, None] ** 2).sum(0) * s2 / scale ** 2
     free = np.abs(Vt[~ok]).max(0) > NULL_COMPONENT if (~ok).any() else np.zeros(J.shape[1], bool)

@@ -37,7 +37,8 @@ from ...dynamics._robot import Robot
 from ...measurements._transmission import Transmission, TransmissionLike
 from .._model._load import LoadFriction
 from .._model._offset import Offset
-from .._model._torque_model import TorqueModel, model_of
+from .._model._checks import model_of
+from .._model._torque_model import TorqueModel
 from .._payload._least_squares import LinearFit
 from .._payload._term import PayloadInertia, payload_frame
 from .._recordings import Data, recordings_of, stacked

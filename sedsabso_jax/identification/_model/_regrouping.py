@@ -21,9 +21,7 @@ def kept_columns(model: Any) -> np.ndarray:
     that the base regressor does not span: scaled columns at random states, ordered QR
     (as :func:`~sedsabso_jax.base_parameters`); kept per model structure (its base,
     recordings, transmission and terms' settings)."""
-    key = (id(model.base), model.recordings,
-           None if model.transmission is None else model.transmission.tobytes(),
-           tuple((type(t), repr(sorted(t.settings().items()))) for t in model.terms))
+    key = model.structure
     if key not in _KEPT:
         _KEPT[key] = (model.base, _independent(model))
     return _KEPT[key][1]

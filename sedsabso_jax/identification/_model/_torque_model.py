@@ -25,6 +25,7 @@ of a fit (:meth:`TorqueModel.reading`), the constraints of a physical body
 from __future__ import annotations
 
 import dataclasses
+import weakref
 from collections.abc import Callable, Iterable
 from typing import Any
 
@@ -43,6 +44,19 @@ from ._term import AbstractTerm, Nonlinear, Signals
 
 #: How a model's nonlinear parameters are searched unless it says otherwise.
 DEFAULT_SEARCH = CoordinateSearch()
+#: What each model has worked out about itself (its names, columns, structure), by the
+#: model's identity while it lives: an immutable model's answers never change.
+_KNOWN: dict[int, tuple[weakref.ref, dict]] = {}
+
+
+def _known(model: object) -> dict:
+    """The answers kept for ``model`` (dropped with it)."""
+    key = id(model)
+    entry = _KNOWN.get(key)
+    if entry is None or entry[0]() is not model:
+        entry = (weakref.ref(model, lambda _, k=key: _KNOWN.pop(k, None)), {})
+        _KNOWN[key] = entry
+    return entry[1]
 
 
 def _matrix(transmission: object) -> object:
@@ -173,10 +187,25 @@ class TorqueModel(eqx.Module):
     def _extra_names(self) -> list[str]:
         return [name for term in self.terms for name in term.names(self)]
 
+    def _memo(self, key: str, make: Callable[[], Any]) -> Any:
+        known = _known(self)
+        if key not in known:
+            known[key] = make()
+        return known[key]
+
+    @property
+    def structure(self) -> tuple:
+        """What sets the model's columns but the values its terms read of a fit: its base
+        (by identity), recordings, transmission and each term's kind and settings."""
+        return self._memo("structure", lambda: (
+            id(self.base), self.recordings,
+            None if self.transmission is None else self.transmission.tobytes(),
+            tuple((type(t), repr(sorted(t.settings().items()))) for t in self.terms)))
+
     @property
     def _kept(self) -> np.ndarray:
         """Indices of the extra columns that the base regressor does not span."""
-        return kept_columns(self)
+        return self._memo("kept", lambda: kept_columns(self))
 
     @property
     def regrouped(self) -> tuple[str, ...]:
@@ -187,8 +216,10 @@ class TorqueModel(eqx.Module):
 
     @property
     def names(self) -> tuple[str, ...]:
-        extra = self._extra_names()
-        return tuple(self.base.names) + tuple(extra[i] for i in self._kept)
+        def make():
+            extra = self._extra_names()
+            return tuple(self.base.names) + tuple(extra[i] for i in self._kept)
+        return self._memo("names", make)
 
     def _per_column(self, answer) -> np.ndarray:
         extra = [answer(term) for term in self.terms for _ in term.names(self)]
@@ -198,13 +229,13 @@ class TorqueModel(eqx.Module):
     def nonnegative(self) -> np.ndarray:
         """Per column (:attr:`names`): whether a physical value is >= 0 (the terms that
         say so; the base columns are constrained through the full parameters)."""
-        return self._per_column(lambda term: term.nonnegative)
+        return self._memo("nonnegative", lambda: self._per_column(lambda t: t.nonnegative))
 
     @property
     def bodies(self) -> np.ndarray:
         """Per column (:attr:`names`): whether it is a rigid body's inertial parameter
         (10 a body, :attr:`~._term.AbstractTerm.body`), constrained as the links are."""
-        return self._per_column(lambda term: term.body)
+        return self._memo("bodies", lambda: self._per_column(lambda t: t.body))
 
     @property
     def dim(self) -> int:
@@ -214,9 +245,12 @@ class TorqueModel(eqx.Module):
     def rigid_columns(self) -> np.ndarray:
         """The base columns of the rigid body: all but each joint's viscous and Coulomb
         friction (which never regroup)."""
-        friction = {c for p in ("FV", "FC") for c in self.base.joint_columns(p)
-                    if c is not None}
-        return np.array([c for c in range(self.base.rank) if c not in friction], dtype=int)
+        def make():
+            friction = {c for p in ("FV", "FC") for c in self.base.joint_columns(p)
+                        if c is not None}
+            return np.array([c for c in range(self.base.rank) if c not in friction],
+                            dtype=int)
+        return self._memo("rigid", make)
 
     def coulomb(self, qd: Any, xp: Any = np) -> tuple[Any, bool]:
         """The model's Coulomb shape at ``qd`` (a term's, else ``sign(qd)``) and whether a
@@ -360,26 +394,3 @@ class TorqueModel(eqx.Module):
         if all(a is b for a, b in zip(terms, self.terms)):
             return self
         return dataclasses.replace(self, terms=terms)
-
-
-def model_of(robot: Robot, model: TorqueModel | None) -> TorqueModel:
-    """``model``, checked to be a :class:`TorqueModel` of ``robot``; None: the robot's
-    rigid-body model with viscous and Coulomb friction."""
-    if not isinstance(robot, Robot):
-        raise TypeError(f"robot must be a sedsabso_jax.Robot, got {type(robot).__name__}")
-    if model is None:
-        return TorqueModel.of(robot)
-    if not isinstance(model, TorqueModel):
-        raise TypeError(f"model must be a TorqueModel (TorqueModel.of(robot, terms); "
-                        f"parse_friction reads the command line's 'a+b' text), got {model!r}")
-    if model.robot.n_params != robot.n_params or model.robot.n_joints != robot.n_joints:
-        raise ValueError(f"model is a TorqueModel of robot {model.robot.name!r} with "
-                         f"{model.robot.n_joints} joints, not of {robot.name!r}")
-    return model
-
-
-def regrouped_message(model: TorqueModel) -> str:
-    """The warning that extra columns of ``model`` were left out."""
-    return (f"identify: {', '.join(model.regrouped)} cannot be identified apart from the base "
-            f"parameters (their columns are in the base regressor's span); left out of the "
-            f"model")

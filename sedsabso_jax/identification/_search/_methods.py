@@ -57,11 +57,11 @@ class CoordinateSearch(AbstractSearch):
     docstring): the first sweep's grid spans the bounds, each later one spans one of the
     last grid's steps either side of the best (``(points - 1) / 2`` times finer: the
     minimum of a function of one variable lies within a step of its best grid point);
-    ``sweeps`` sweeps, then a parabola through the best value and its two neighbours on
-    the last grid, per coordinate."""
+    ``sweeps`` sweeps, the last also trying the vertex of the parabola through each
+    coordinate's best value and its two neighbours on its grid."""
 
-    points: int = eqx.field(default=9, converter=as_int)
-    sweeps: int = eqx.field(default=4, converter=as_int)
+    points: int = eqx.field(default=7, converter=as_int)
+    sweeps: int = eqx.field(default=3, converter=as_int)
     label: ClassVar[str] = "coordinate search"
 
     def __check_init__(self):
@@ -87,13 +87,15 @@ class CoordinateSearch(AbstractSearch):
             better = f[np.arange(k), at] < best
             moved = u.copy()
             moved[better] = grid[better, at[better]]
+            candidates = [moved]  # the moves together; in the last sweep, refined too
             if sweep == self.sweeps - 1:
-                moved = _parabola(moved, grid, f, at, better, lower, upper)
-            together = float(losses(problem, moved[None])[0])
-            evaluations += 1
+                candidates.append(_parabola(moved, grid, f, at, better, lower, upper))
+            tried = losses(problem, np.stack(candidates))
+            evaluations += len(candidates)
+            together = float(tried.min())
             single = int(np.argmin(f.min(axis=1)))
             if together < best and together <= f[single].min():
-                u, best = moved, together
+                u, best = candidates[int(np.argmin(tried))], together
             elif f[single].min() < best:
                 u = u.copy()
                 u[single] = grid[single, np.argmin(f[single])]
@@ -103,10 +105,11 @@ class CoordinateSearch(AbstractSearch):
 
 
 def _parabola(u, grid, f, at, better, lower, upper):
-    """``u`` with each coordinate whose best grid value is inside its grid moved to the
-    vertex of the parabola through that value and its two neighbours."""
+    """``u`` with each coordinate whose best grid value is inside its grid (the current
+    value too) moved to the vertex of the parabola through that value and its two
+    neighbours."""
     out = u.copy()
-    for j in np.flatnonzero(better & (at > 0) & (at < grid.shape[1] - 1)):
+    for j in np.flatnonzero((at > 0) & (at < grid.shape[1] - 1)):
         x, y = grid[j, at[j] - 1:at[j] + 2], f[j, at[j] - 1:at[j] + 2]
         if not np.all(np.diff(x) > 0):  # points clipped onto a bound
             continue

@@ -58,7 +58,8 @@ from .._estimators._estimator import (
 from .._estimators._least_squares import OLS, WLS, PhysicallyConsistent
 from .._fit._samples import Samples
 from .._model._candidates import candidate_models
-from .._model._torque_model import TorqueModel, model_of
+from .._model._checks import model_of
+from .._model._torque_model import TorqueModel
 from .._options import one_or_more
 from .._recordings import Data, recordings_of, stacked
 from ._cross_validation import TIE_FRACTION as TIE_FRACTION
