@@ -180,7 +180,7 @@ def table() -> list[dict]:
 
 
 # ---------------------------------------------------------------- the issue's target
-def versus_fixed(repeats: int = 3) -> list[dict]:
+def versus_fixed(repeats: int = 5) -> list[dict]:
     """The KUKA's run 1, OLS with equal weights, physically consistent, offset + smooth
     Coulomb + load friction + presliding, the displacement fixed (2 mrad) or searched:
     chosen and judged as ``sedsabso-jax identify`` does (the default validation's 12

@@ -304,6 +304,8 @@ def test_a_torque_model_carries_its_own_settings(rs010n):
     robot, base = rs010n
     model = TorqueModel.of(robot, [Offset()], base=base)
     assert model.friction == "viscous-coulomb+offset" and model.base is base
+    # one term needs no list (0.5: "'Offset' object is not iterable")
+    assert TorqueModel.of(robot, Offset(), base=base).names == model.names
     with pytest.raises(ValueError, match="model is a TorqueModel of robot 'kuka-lwr'"):
         identify(robot, None, OLS(), TorqueModel.of(sj.robots.kuka_lwr4()))
     with pytest.raises(TypeError, match="robot must be a sedsabso_jax.Robot"):

@@ -197,6 +197,21 @@ def test_consistent_estimate_kept_else_projected(rs010n_runs):
     assert np.linalg.eigvalsh(pseudo_inertia(noisy.params10)).min() > 0
 
 
+def test_the_data_are_what_identify_takes(rs010n_runs):
+    """The recordings as identify takes them: arrays ``(q, qd, qdd, tau)`` as well as
+    with the times first (0.5 took only the latter, and said "got tuple")."""
+    robot, _, runs = rs010n_runs
+    unloaded, loaded = runs(0, noise=0.0)
+    arrays = (loaded.q, loaded.qd, loaded.qdd, loaded.tau)
+    p = sj.identify_payload(robot, arrays, "link3", estimator=sj.WLS())
+    assert p.mass == pytest.approx(5.0, rel=1e-6)
+    with pytest.raises(ValueError, match=r"^loaded recordings: data must be a "
+                                         r"Measurements, several, or one recording's arrays "
+                                         r"\(q, qd, qdd, tau\) or \(times, q, qd, qdd, tau\), "
+                                         r"got a tuple of 3$"):
+        sj.identify_payload(robot, arrays[:3], "link3")
+
+
 def test_a_fit_that_constrains_the_links_keeps_the_payload_a_body(rs010n_runs):
     """``PhysicallyConsistent(WLS())`` constrains the links and the payload (a body term)
     alike: the payload's pseudo-inertia stays positive semidefinite where the
