@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> None:
     if unloaded:
         count = len(loaded) + len(unloaded) if args.offset_per_recording else 1
         model = TorqueModel.of(robot, terms, transmission=transmission, recordings=count)
-    least_squares = WLS() if args.weights == "residual" else OLS()
+    least_squares = WLS(passes=2) if args.weights == "residual" else OLS()
     estimator = (PhysicallyConsistent(least_squares, links=False) if args.physical
                  else least_squares)
     with files.urdf_source(args.robot) as urdf:

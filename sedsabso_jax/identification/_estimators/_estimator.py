@@ -166,14 +166,17 @@ class WeightedRows:
 
 
 def weigh(problem: FitProblem, sigma: Sigma, *, default: str = "equal",
-          factor: bool = False) -> WeightedRows:
+          factor: bool = False, passes: int = 1) -> WeightedRows:
     """The row weighting every estimator uses: each joint's rows divided by its sigma.
 
     ``sigma`` (see :func:`check_sigma`): None (``default``: equal, or ``"residual"`` for
     WLS), ``"residual"`` (Gautier's two-step estimate: the RMS of each joint's OLS
     residual, corrected for the parameters acting on that joint), ``"limits"`` (the
     problem's torque limits: the L2 objective is then the squared NRMS over the limits),
-    or ``n`` numbers. ``factor``: also factorise the weighted rows (least squares)."""
+    or ``n`` numbers. ``factor``: also factorise the weighted rows (least squares).
+    ``passes``: Gautier's estimate made again from the residual of the fit it weighs, so
+    many times in all (the first pass's residual of a joint with small torques carries
+    the large joints' noise through the parameters they share)."""
     Y, tau, n = problem.Y, problem.tau, problem.model.robot.n_joints
     T = problem.n_samples
     d = Y.shape[-1]
@@ -196,10 +199,15 @@ def weigh(problem: FitProblem, sigma: Sigma, *, default: str = "equal",
         s = given
     else:  # Gautier: sigma_j^2 = ||r_j||^2 / (T - d_j), d_j = parameters acting on joint j
         assert factor0 is not None  # computed above for "residual"
-        r = Y @ factor0.solve() - tau
         d_j = np.count_nonzero(np.any(Y != 0, axis=0), axis=-1)
-        s = np.sqrt((np.sum(r ** 2, axis=0) + problem.left_out) / np.maximum(T - d_j, 1))
-        s = np.where(s > 0, s, max(s.max(), 1e-12))
+        x = factor0.solve()
+        for k in range(passes):
+            r = Y @ x - tau
+            s = np.sqrt((np.sum(r ** 2, axis=0) + problem.left_out) / np.maximum(T - d_j, 1))
+            s = np.where(s > 0, s, max(s.max(), 1e-12))
+            if k + 1 < passes:  # the fit these weights give, for the next pass
+                row = np.tile(1.0 / s, Y.shape[0])
+                x = factorize(W0 * row[:, None], tau0 * row).solve()
     assert s is not None
     row = np.tile(1.0 / s, Y.shape[0])
     W, b = W0 * row[:, None], tau0 * row

@@ -25,7 +25,7 @@ import numpy as np
 from jaxtyping import ArrayLike, Float
 
 from .._model._torque_model import TorqueModel
-from .._options import as_float, as_floats, check_number
+from .._options import as_float, as_floats, as_int, check_count, check_number
 from ._estimator import (
     Estimator,
     EstimatorFit,
@@ -72,7 +72,8 @@ class AbstractLeastSquares(Estimator):
     norm: ClassVar[int] = 2
 
     def fit(self, problem: FitProblem) -> EstimatorFit:
-        rows = weigh(problem, self.sigma, default=self.default_weighting, factor=True)
+        rows = weigh(problem, self.sigma, default=self.default_weighting, factor=True,
+                     passes=self.passes_of_weights)
         return EstimatorFit(rows.weighted_factor.solve(), None, rows.sigma, rows.factor0, rows.W,
                             rows.b, None, {})
 
@@ -80,20 +81,30 @@ class AbstractLeastSquares(Estimator):
         check_weighting(self, model, limits)
 
     def settings(self) -> dict:
-        return weighting_settings(self)
+        out = weighting_settings(self)
+        passes = self.passes_of_weights
+        return out if passes == 1 else {**out, "passes": passes}
 
     def physically_consistent(self) -> PhysicallyConsistent:
         return PhysicallyConsistent(self)
 
+    @property
+    def passes_of_weights(self) -> int:
+        """How many times Gautier's weights are made (each final class's ``passes``, a
+        field after its ``sigma``)."""
+        return getattr(self, "passes")
+
     def __check_init__(self):
         check_sigma(self.sigma)
+        check_count("passes", self.passes_of_weights, 1)
 
 
 class OLS(AbstractLeastSquares):
     """Ordinary least squares; ``sigma`` weights the rows (:func:`~._estimator.weigh`;
-    None: equal weights)."""
+    None: equal weights); ``passes``: of Gautier's weights (``sigma="residual"``)."""
 
     sigma: SigmaOption = eqx.field(default=None, converter=as_floats)
+    passes: int = eqx.field(default=1, converter=as_int)
     name: ClassVar[str] = "OLS"
     default_weighting: ClassVar[str] = "equal"
     registered_as: ClassVar[dict[str, dict[str, Any]]] = {"OLS": {}}
@@ -101,9 +112,11 @@ class OLS(AbstractLeastSquares):
 
 class WLS(AbstractLeastSquares):
     """Weighted least squares: rows divided by each joint's ``sigma``; ``"residual"``
-    (the default, also for None) is Gautier's two-step estimate."""
+    (the default, also for None) is Gautier's two-step estimate, made again from the
+    weighted fit's residual ``passes - 1`` times (:func:`~._estimator.weigh`)."""
 
     sigma: SigmaOption = eqx.field(default="residual", converter=as_floats)
+    passes: int = eqx.field(default=1, converter=as_int)
     name: ClassVar[str] = "WLS"
     default_weighting: ClassVar[str] = "residual"
     registered_as: ClassVar[dict[str, dict[str, Any]]] = {"WLS": {}}
@@ -165,6 +178,8 @@ class PhysicallyConsistent(Estimator):
     def settings(self) -> dict:
         out = {**weighting_settings(self), "prior_weight": self.prior_weight,
                "prior_strength": self.prior_strength, "psd_margin": PSD_MARGIN}
+        if self.least_squares.passes_of_weights != 1:
+            out["passes"] = self.least_squares.passes_of_weights
         return out if self.links else {**out, "links": False}
 
     def check(self, model: TorqueModel, limits: Limits) -> None:
@@ -176,7 +191,8 @@ class PhysicallyConsistent(Estimator):
 
     def fit(self, problem: FitProblem) -> EstimatorFit:
         ls = self.least_squares
-        rows = weigh(problem, ls.sigma, default=ls.default_weighting, factor=True)
+        rows = weigh(problem, ls.sigma, default=ls.default_weighting, factor=True,
+                     passes=ls.passes_of_weights)
         if self.links:
             fit = fit_physical(problem.model, rows.weighted_factor,
                                prior_of(self.prior, problem.model), self.prior_weight,

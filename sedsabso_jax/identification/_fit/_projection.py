@@ -156,11 +156,14 @@ class Projection(eqx.Module):
         AtA, Atb = M.T @ M, M.T @ b.reshape(-1)
         P = np.linalg.inv(AtA + RIDGE * np.max(np.diag(AtA)) * np.eye(len(AtA)))
         PAtb = P @ Atb
-        return cls(*shared, jnp.asarray(w), jnp.asarray(mask),
-                   tuple(jnp.asarray(A[:, j][:, list(cols)]) for j, cols in recipe.rows),
-                   jnp.asarray(b), jnp.asarray(P), jnp.asarray(PAtb),
-                   jnp.asarray(float(b.reshape(-1) @ b.reshape(-1) - Atb @ PAtb)),
-                   jnp.asarray(float(mask.sum() * model.robot.n_joints)), recipe)
+        q, qd, qdd, recording, steps, rigid = shared
+        return cls(q=q, qd=qd, qdd=qdd, recording=recording, steps=steps, rigid=rigid,
+                   weights=jnp.asarray(w), mask=jnp.asarray(mask),
+                   A_rows=tuple(jnp.asarray(A[:, j][:, list(cols)])
+                                for j, cols in recipe.rows),
+                   b=jnp.asarray(b), P=jnp.asarray(P), PAtb=jnp.asarray(PAtb),
+                   floor=jnp.asarray(float(b.reshape(-1) @ b.reshape(-1) - Atb @ PAtb)),
+                   rows=jnp.asarray(float(mask.sum() * model.robot.n_joints)), recipe=recipe)
 
     def moving(self, u: Float[Array, " k"]) -> Float[Array, "T K"]:
         """The moved columns at ``u``, on their pairs' rows, weighted and masked."""

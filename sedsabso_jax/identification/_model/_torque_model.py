@@ -54,7 +54,9 @@ def _known(model: object) -> dict:
     key = id(model)
     entry = _KNOWN.get(key)
     if entry is None or entry[0]() is not model:
-        entry = (weakref.ref(model, lambda _, k=key: _KNOWN.pop(k, None)), {})
+        def forget(_: weakref.ref, k: int = key) -> None:
+            _KNOWN.pop(k, None)
+        entry = (weakref.ref(model, forget), {})
         _KNOWN[key] = entry
     return entry[1]
 

@@ -53,9 +53,10 @@ from ._term import PayloadInertia, payload_frame
 
 #: A mass whose standard deviation exceeds this fraction of it is warned of.
 POOR_MASS = 0.1
-#: The estimator unless told: Gautier's weighted least squares, the payload (and the
-#: model's terms) physically consistent, the robot's links free.
-DEFAULT_ESTIMATOR = PhysicallyConsistent(WLS(), links=False)
+#: The estimator unless told: Gautier's weighted least squares (its weights made twice,
+#: the second time from the weighted fit's residual), the payload (and the model's terms)
+#: physically consistent, the robot's links free.
+DEFAULT_ESTIMATOR = PhysicallyConsistent(WLS(passes=2), links=False)
 
 
 def _recordings(robot: Robot, data: Data | None, label: str) -> list:
