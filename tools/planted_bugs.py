@@ -186,8 +186,9 @@ BUGS = [
      "offsets, not their mean", VALIDATIONS, None),
     ("identification/_estimators/_physical.py",
      "    problem.solve(solver=cp.CLARABEL)\n    return problem, parameters, p, extras",
-     "    return problem, parameters, p, extras", "the conic programme's first solve takes another path (not "
-     "repeatable)", VALIDATIONS, None),
+     "    return problem, parameters, p, extras",
+     "the conic programme's first solve takes another path (not repeatable)", VALIDATIONS,
+     None),
     ("identification/_estimators/_physical.py",
      "        constraints.append(extras[list(nonneg)] >= 0)",
      "        pass", "quadratic friction may turn negative in a physical fit", VALIDATIONS,

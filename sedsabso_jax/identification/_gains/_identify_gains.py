@@ -35,9 +35,9 @@ from jaxtyping import ArrayLike, Float
 from ..._deprecation import caller_stacklevel
 from ...dynamics._robot import Robot
 from ...measurements._transmission import Transmission, TransmissionLike
+from .._model._checks import model_of
 from .._model._load import LoadFriction
 from .._model._offset import Offset
-from .._model._checks import model_of
 from .._model._torque_model import TorqueModel
 from .._payload._least_squares import LinearFit
 from .._payload._term import PayloadInertia, payload_frame

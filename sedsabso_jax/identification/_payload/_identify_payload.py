@@ -43,8 +43,8 @@ from .._estimators._estimator import Estimator, checked_estimator
 from .._estimators._least_squares import WLS, PhysicallyConsistent
 from .._fit._identify import Identification, identified
 from .._fit._uncertainty import function_std
-from .._model._offset import Offset
 from .._model._checks import model_of
+from .._model._offset import Offset
 from .._model._torque_model import TorqueModel
 from .._recordings import Data, recordings_of, stacked
 from ._least_squares import LinearFit, consistent, is_consistent, joint_sigma
