@@ -39,9 +39,9 @@ def main(argv: list[str] | None = None) -> dict:
     args = parser.parse_args(argv)
     ns = page_namespace()
     sj, robot, data, Ripple = ns["sj"], ns["robot"], ns["data"], ns["Ripple"]
-    from sedsabso_jax.identification import (CoordinateSearch, LeastSquaresSearch,
-                                             PopulationSearch)
-
+    search_of = sj.identification
+    CoordinateSearch, PopulationSearch = search_of.CoordinateSearch, search_of.PopulationSearch
+    LeastSquaresSearch = search_of.LeastSquaresSearch
     methods = [CoordinateSearch(), CoordinateSearch(points=15), CoordinateSearch(points=25),
                PopulationSearch(sj.SEDSABSO(), 1200), PopulationSearch(sj.LDWPSO(), 1200),
                PopulationSearch(sj.Evosax("CMA_ES"), 1200), LeastSquaresSearch()]
@@ -63,7 +63,7 @@ def main(argv: list[str] | None = None) -> dict:
     if args.json:
         from benchmarks.output import to_json
 
-        to_json(result, args.json)
+        args.json.write_text(to_json(result))
     return result
 
 
