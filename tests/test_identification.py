@@ -387,7 +387,8 @@ def noisy(rs010n):
 def test_least_squares_estimators_are_numpys_lstsq(noisy):
     """OLS and Levenberg-Marquardt minimise ||W x - b||; WLS the same on rows divided by
     sigma: the given numbers, the limits, or Gautier's two-step estimate computed here from
-    numpy's OLS residual (d_j = columns acting on joint j)."""
+    numpy's OLS residual (d_j = columns acting on joint j), and with ``passes=2`` made
+    again from the residual of the fit those weights give."""
     data, model, W, b = noisy
     robot = model.robot
     limits = np.array([100.0, 80.0, 20.0])
@@ -400,12 +401,17 @@ def test_least_squares_estimators_are_numpys_lstsq(noisy):
     r = (W @ ols - b).reshape(-1, 3)
     d_j = np.count_nonzero(np.any(W.reshape(-1, 3, model.dim) != 0, axis=0), axis=-1)
     gautier = np.sqrt(np.sum(r ** 2, axis=0) / (r.shape[0] - d_j))
+    r2 = (W @ lstsq(gautier) - b).reshape(-1, 3)
+    again = np.sqrt(np.sum(r2 ** 2, axis=0) / (r2.shape[0] - d_j))
+    assert np.abs(again / gautier - 1).max() > 1e-3  # the second pass changes them
     for estimator, sigma, rtol in [(OLS(), np.ones(3), 1e-9),
                                    (LevenbergMarquardt(), np.ones(3), 1e-6),
                                    (WLS([1.0, 3.0, 0.2]), np.array([1.0, 3.0, 0.2]), 1e-9),
                                    (WLS("limits"), limits, 1e-9),
                                    (LevenbergMarquardt(sigma="limits"), limits, 1e-6),
-                                   (WLS(), gautier, 1e-9)]:
+                                   (WLS(), gautier, 1e-9),
+                                   (WLS(passes=2), again, 1e-9),
+                                   (OLS(sigma="residual", passes=2), again, 1e-9)]:
         ident = identify(robot, data, estimator, model, limits=limits)
         np.testing.assert_allclose(ident.settings["sigma"], sigma, rtol=1e-12)
         np.testing.assert_allclose(ident.values, lstsq(sigma), rtol=rtol, atol=rtol * 1e-3,
