@@ -113,17 +113,25 @@ def function_std(W: Float[np.ndarray, "m d"], residual: Float[np.ndarray, " m"],
     covariance of :func:`parameter_std` (columns scaled to unit norm, a column of
     rounding errors taken as zero): ``inf`` where ``G``'s row has a part the rows do not
     determine."""
-    W, residual = np.asarray(W, dtype=float), np.asarray(residual, dtype=float)
-    m = W.shape[0]
+    residual = np.asarray(residual, dtype=float)
+    return rows_function_std(W, float(residual @ residual), residual.shape[0], G)
+
+
+def rows_function_std(W: Float[np.ndarray, "m d"], residual2: float, rows: int,
+                      G: Float[np.ndarray, "k d"]) -> Float[np.ndarray, " k"]:
+    """:func:`function_std` from rows ``W`` whose ``W^T W`` is that of ``rows`` rows (the
+    rows themselves, or a compression of them) and the rows' squared residual norm
+    ``residual2``: ``s^2 g (W^T W)^+ g^T`` with ``s^2 = residual2 / (rows - rank)``."""
+    W = np.asarray(W, dtype=float)
     norms = np.linalg.norm(W, axis=0)
     live = norms > RANK_TOLERANCE * norms.max(initial=0.0)
     scale = np.where(live, norms, 1.0)
     _, s, Vt = np.linalg.svd(np.where(live, W / scale, 0.0), full_matrices=False)
     rank = int(np.sum(s > RANK_TOLERANCE * s[0])) if s.size and s[0] > 0 else 0
     g = np.atleast_2d(G) / scale
-    if m <= rank:
+    if rows <= rank:
         return np.full(g.shape[0], np.nan)
-    variance = float(residual @ residual) / (m - rank)
+    variance = float(residual2) / (rows - rank)
     spread = (Vt[:rank] @ g.T) / s[:rank, None]
     std = np.sqrt(variance * np.sum(spread ** 2, axis=0))
     null = np.linalg.norm(Vt[rank:] @ g.T, axis=0)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from jaxtyping import Float
 
-from .._fit._uncertainty import NULL_COMPONENT, RANK_TOLERANCE
+from .._fit._uncertainty import rows_function_std
 
 
 def compress(blocks: Float[np.ndarray, "T n c"]) -> Float[np.ndarray, "n c c"]:
@@ -33,20 +33,6 @@ def std(W: Float[np.ndarray, "m d"], residual2: float, rows: int,
         G: Float[np.ndarray, "k d"]) -> Float[np.ndarray, " k"]:
     """The standard deviation of each row's function ``G x`` from compressed rows ``W``
     (``W^T W`` that of the ``rows`` rows they stand for) and the rows' squared residual
-    norm ``residual2``: ``s^2 g (W^T W)^+ g^T`` with ``s^2 = residual2 / (rows - rank)``,
-    as :func:`~.._fit._uncertainty.function_std` (columns scaled to unit norm; ``inf``
-    where ``g`` has a part the rows do not determine)."""
-    norms = np.linalg.norm(W, axis=0)
-    live = norms > RANK_TOLERANCE * norms.max(initial=0.0)
-    scale = np.where(live, norms, 1.0)
-    _, s, Vt = np.linalg.svd(np.where(live, W / scale, 0.0), full_matrices=False)
-    rank = int(np.sum(s > RANK_TOLERANCE * s[0])) if s.size and s[0] > 0 else 0
-    g = np.atleast_2d(G) / scale
-    if rows <= rank:
-        return np.full(g.shape[0], np.nan)
-    variance = float(residual2) / (rows - rank)
-    spread = (Vt[:rank] @ g.T) / s[:rank, None]
-    out = np.sqrt(variance * np.sum(spread ** 2, axis=0))
-    null = np.linalg.norm(Vt[rank:] @ g.T, axis=0)
-    size = np.maximum(np.linalg.norm(g, axis=1), 1e-300)
-    return np.where(null > NULL_COMPONENT * size, np.inf, out)
+    norm ``residual2``: :func:`~.._fit._uncertainty.rows_function_std` (columns scaled to
+    unit norm; ``inf`` where ``g`` has a part the rows do not determine)."""
+    return rows_function_std(W, residual2, rows, G)
