@@ -78,7 +78,8 @@ from sedsabso_jax.dynamics import fixed_link_pose, params_from_com
 
 NOISE, FRICTION, LOAD, REST, OFFSET, GAIN_ERROR = 0.02, 0.03, 0.03, 0.03, 0.02, 0.20
 DISPLACEMENT = 0.01  # the model's presliding q_c (rad); the plant's are 5-20 mrad
-METHODS = ("ordinary", "total", "likelihood")
+METHODS = (sj.identification.OrdinaryGains(), sj.identification.TotalGains(),
+           sj.identification.LikelihoodGains())
 CALIBRATION = {"RS010N": (10.0, [0.05, 0.02, 0.1], (0.25, 0.2, 0.2)),
                "KUKA LWR4+": (3.0, [0.0, 0.01, 0.06], (0.1, 0.1, 0.12)),
                "Franka Panda": (2.0, [0.0, 0.01, 0.08], (0.08, 0.08, 0.1)),
@@ -172,8 +173,8 @@ def gains_case(plant: Plant, picked, seed: int) -> list[dict]:
             warnings.simplefilter("always")
             gains = sj.identify_drive_gains(plant.robot, unloaded, loaded, plant.link, M,
                                             model=model, method=method, urdf=plant.urdf)
-        found[method] = gains
-        rows.append({"robot": plant.name, "seed": seed, "method": method,
+        found[method.name] = gains
+        rows.append({"robot": plant.name, "seed": seed, "method": method.name,
                      "seconds": time.perf_counter() - t0,
                      "gain_error_percent": 100 * (gains.gains / plant.gains - 1),
                      "relative_std_percent": 100 * gains.relative_std,

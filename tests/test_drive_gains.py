@@ -60,7 +60,10 @@ def rs010n():
     return robot, motion, plant, payload, runs
 
 
-@pytest.mark.parametrize("method", sj.identification.GAIN_METHODS)
+METHODS = [m() for m in sj.identification.GAIN_METHODS.values()]
+
+
+@pytest.mark.parametrize("method", METHODS, ids=lambda m: m.name)
 def test_noise_free_gains_and_payload_are_exact(rs010n, method):
     robot, _, _, payload, (unloaded, loaded) = rs010n
     model = sj.TorqueModel.of(robot, sj.Offset())
@@ -88,7 +91,7 @@ def test_a_known_centre_of_mass_is_held(rs010n):
     assert found.settings["com"] == pytest.approx(COM.tolist())
 
 
-@pytest.mark.parametrize("method", sj.identification.GAIN_METHODS)
+@pytest.mark.parametrize("method", METHODS, ids=lambda m: m.name)
 def test_motor_currents_through_a_coupled_transmission(rs010n, method):
     """Currents per motor behind gear ratios and a coupling: the motors' gains."""
     robot, motion, plant, _, _ = rs010n
@@ -121,9 +124,11 @@ def test_noisy_currents_bias_least_squares_not_the_likelihood():
                         for s, p in ((3, robot.params), (4, plant)))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # a joint's calibration is poor
-        found = {m: sj.identify_drive_gains(robot, unloaded, loaded, "link3", MASS, method=m,
-                                            model=sj.TorqueModel.of(robot, sj.Offset()))
-                 for m in ("ordinary", "likelihood")}
+        found = {m.name: sj.identify_drive_gains(robot, unloaded, loaded, "link3", MASS,
+                                                 method=m, model=sj.TorqueModel.of(
+                                                     robot, sj.Offset()))
+                 for m in (sj.identification.OrdinaryGains(),
+                           sj.identification.LikelihoodGains())}
     z = {m: np.abs(f.gains - GAINS) / f.std for m, f in found.items()}
     assert z["ordinary"].max() > 5, z
     assert z["likelihood"].max() < 4, z
@@ -209,7 +214,7 @@ def test_payload_fit_reads_its_own_torque_and_restarts_its_state(rs010n, term):
 def test_bad_arguments(rs010n):
     robot, _, _, _, (unloaded, loaded) = rs010n
     cases = [({"mass": 0.0}, "mass must be positive"), ({"mass": float("nan")}, "mass must"),
-             ({"com": [0.1, 0.2]}, "com must be 3"), ({"method": "best"}, "method must be"),
+             ({"com": [0.1, 0.2]}, "com must be 3"),
              ({"unloaded": []}, "unloaded recordings are needed"),
              ({"link": "link1"}, "do not excite the payload's mass"),
              ({"model": sj.TorqueModel.of(robot, sj.Presliding(fitted=True))},
@@ -220,6 +225,8 @@ def test_bad_arguments(rs010n):
         with pytest.raises(ValueError, match=match):
             sj.identify_drive_gains(robot, kw.pop("unloaded"), kw.pop("loaded"),
                                     kw.pop("link"), kw.pop("mass"), **kw)
+    with pytest.raises(TypeError, match="method must be a drive gains' method"):
+        sj.identify_drive_gains(robot, unloaded, loaded, "link3", MASS, method="likelihood")
 
 
 # ------------------------------------------------------------------------ the command

@@ -45,6 +45,7 @@ def run(args: argparse.Namespace) -> None:
     from .._output import write_json
     from ..dynamics import _robots as robots
     from ..identification._gains._identify_gains import identify_drive_gains
+    from ..identification._gains._solvers import GAIN_METHODS
     from ..identification._model._order import parse_friction
     from ..identification._model._torque_model import TorqueModel
 
@@ -63,7 +64,7 @@ def run(args: argparse.Namespace) -> None:
     model = TorqueModel.of(robot, terms, transmission=transmission, recordings=count)
     with files.urdf_source(args.robot) as urdf:
         gains = identify_drive_gains(robot, unloaded, loaded, args.link, args.mass, com,
-                                     model=model, method=args.method,
+                                     model=model, method=GAIN_METHODS[args.method](),
                                      transmission=transmission, urdf=urdf)
     print(gains.text())
     if args.json is not None:
@@ -122,8 +123,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     model.add_argument("--offset-per-recording", action="store_true",
                        help="one torque offset per joint and file")
     est = pp.add_argument_group("estimator")
-    est.add_argument("--method", choices=GAIN_METHODS, default=DEFAULT_METHOD,
-                     help=f"how the equations are solved ({DEFAULT_METHOD}: the maximum "
+    est.add_argument("--method", choices=tuple(GAIN_METHODS), default=DEFAULT_METHOD.name,
+                     help=f"how the equations are solved ({DEFAULT_METHOD.name}: the maximum "
                      f"likelihood for noise in the currents; ordinary least squares is "
                      f"biased by it)")
     out = pp.add_argument_group("outputs", "written atomically: a failed run leaves none")

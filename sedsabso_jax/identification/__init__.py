@@ -44,6 +44,11 @@ from ._fit._fit import Fitted as Fitted
 from ._fit._projection import Projection as Projection
 from ._gains._result import CALIBRATED_STD as CALIBRATED_STD
 from ._gains._solvers import GAIN_METHODS as GAIN_METHODS
+from ._gains._solvers import AbstractGainMethod as AbstractGainMethod
+from ._gains._solvers import LikelihoodGains as LikelihoodGains
+from ._gains._solvers import OrdinaryGains as OrdinaryGains
+from ._gains._solvers import PhysicalGains as PhysicalGains
+from ._gains._solvers import TotalGains as TotalGains
 from ._metrics import nrms_over_limits as nrms_over_limits
 from ._model._candidates import FRICTION_CANDIDATES as FRICTION_CANDIDATES
 from ._model._candidates import candidate_models as candidate_models
@@ -85,5 +90,6 @@ __all__ = [
     "parse_friction", "figure_torques", "extrapolation", "Extrapolation", "Splits",
     "PAYLOAD_PARAMETERS", "Projection", "AbstractSearch", "CoordinateSearch",
     "PopulationSearch", "LeastSquaresSearch", "dahl_state", "increments", "GAIN_METHODS",
+    "AbstractGainMethod", "LikelihoodGains", "TotalGains", "OrdinaryGains", "PhysicalGains",
     "CALIBRATED_STD",
 ]

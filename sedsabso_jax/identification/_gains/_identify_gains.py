@@ -45,10 +45,10 @@ from .._recordings import Data, recordings_of, stacked
 from ._compressed import compress, std
 from ._equations import GainEquations, equations, payload_columns, with_payload
 from ._result import CALIBRATED_STD, DriveGains
-from ._solvers import GAIN_METHODS, Solution, solve
+from ._solvers import AbstractGainMethod, LikelihoodGains, Solution
 
 #: How the equations are solved unless told (chosen by ``python -m benchmarks.drive_gains``).
-DEFAULT_METHOD = "likelihood"
+DEFAULT_METHOD = LikelihoodGains()
 
 
 def _motors(robot: Robot, transmission: TransmissionLike) -> np.ndarray:
@@ -105,7 +105,7 @@ def _excited(eq: GainEquations, link: str) -> None:
 
 
 def _fitted(model: TorqueModel, first_eq: GainEquations, signals: tuple, motors: np.ndarray,
-            mass: float, com: np.ndarray | None, method: str
+            mass: float, com: np.ndarray | None, method: AbstractGainMethod
             ) -> tuple[GainEquations, Solution, dict]:
     """The model's terms completed as :func:`~sedsabso_jax.identify` completes them
     (``first_eq``: the equations of the model without the terms that wait for fitted
@@ -118,24 +118,25 @@ def _fitted(model: TorqueModel, first_eq: GainEquations, signals: tuple, motors:
         raise ValueError("drive gains: load:fixed-point is not supported; use load (two "
                          "stages)")
     if not model.waiting:
-        return first_eq, solve(first_eq, method), report
+        return first_eq, method.solve(first_eq), report
     # the first stage by the method itself: ordinary least squares (identify's first
     # stage) would read the load off values its biased gains distort (the KUKA's wrist
     # gains 1-2 % off in the simulation study, against 0.1-0.4 %)
-    first = solve(first_eq, "likelihood" if method == "physical" else method)
+    first = method.first_stage().solve(first_eq)
     values, _ = first_eq.split(first.theta)
     by_name = dict(zip(first_eq.model.names, values))
     model = model.reading(np.array([by_name.get(n, 0.0) for n in model.names]),
                           only=lambda term: term.waiting)
     report["stages"] = 2
     eq = equations(model, signals, motors, mass, com)
-    return eq, solve(eq, method), report
+    return eq, method.solve(eq), report
 
 
 def identify_drive_gains(robot: Robot, unloaded: Data, loaded: Data, link: str, mass: float,
                          com: Float[ArrayLike, " 3"] | Sequence[float] | None = None, *,
                          model: TorqueModel | None = None,
-                         method: str = DEFAULT_METHOD, transmission: TransmissionLike = None,
+                         method: AbstractGainMethod = DEFAULT_METHOD,
+                         transmission: TransmissionLike = None,
                          urdf: str | os.PathLike[str] | None = None) -> DriveGains:
     """Identify the drive gains from recordings of currents without and with a payload of
     known ``mass`` fixed to ``link`` (module docstring).
@@ -154,8 +155,9 @@ def identify_drive_gains(robot: Robot, unloaded: Data, loaded: Data, link: str, 
             LoadFriction())``: without the load's friction the gains moved by up to 5 % in
             the simulation study); one offset per recording counts the unloaded
             recordings first.
-        method: ``"likelihood"`` (default), ``"ordinary"``, ``"total"`` or ``"physical"``
-            (:mod:`._solvers`).
+        method: how the equations are solved: :class:`~._solvers.LikelihoodGains`
+            (default), :class:`~._solvers.TotalGains`, :class:`~._solvers.OrdinaryGains`
+            or :class:`~._solvers.PhysicalGains` (:mod:`._solvers`).
         transmission: the motors' transmission (a :class:`~sedsabso_jax.Transmission` or
             its matrix ``K``) when the currents are the motors' behind it (positions
             joint side); None: the joints' own currents.
@@ -168,8 +170,9 @@ def identify_drive_gains(robot: Robot, unloaded: Data, loaded: Data, link: str, 
     if not isinstance(robot, Robot):
         raise TypeError(f"robot must be a sedsabso_jax.Robot, got {type(robot).__name__}")
     mass, r = _checked(mass, com)
-    if method not in GAIN_METHODS:
-        raise ValueError(f"method must be one of {GAIN_METHODS}, got {method!r}")
+    if not isinstance(method, AbstractGainMethod):
+        raise TypeError(f"method must be a drive gains' method (LikelihoodGains(), "
+                        f"TotalGains(), OrdinaryGains(), PhysicalGains()), got {method!r}")
     motors = _motors(robot, transmission)
     k, T = payload_frame(robot, link, urdf)
     unloaded_recs = _recordings(robot, unloaded, "unloaded")
@@ -188,7 +191,7 @@ def identify_drive_gains(robot: Robot, unloaded: Data, loaded: Data, link: str, 
     return _result(eq, sol, signals, motors, {
         "link": link, "moving_link": robot.link_names[k], "mass": mass,
         "com": None if r is None else r.tolist(), "friction": base_model.friction,
-        "method": method, "robot": robot.name, **report,
+        "method": method.name, "robot": robot.name, **report,
         "solution": sol.report})
 
 

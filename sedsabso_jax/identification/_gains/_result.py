@@ -13,11 +13,8 @@ import numpy as np
 from ..._output import jsonable, markdown_table
 from ...measurements._container import Measurements
 from .._payload._term import PAYLOAD_PARAMETERS
+from ._solvers import GAIN_METHODS
 
-#: What the text calls each method.
-METHOD_NAMES = {"ordinary": "ordinary least squares", "total": "total least squares",
-                "likelihood": "maximum likelihood (noise in the currents)",
-                "physical": "maximum likelihood, the payload physically consistent"}
 #: A gain whose relative standard deviation exceeds this is not calibrated by the data.
 CALIBRATED_STD = 0.005
 
@@ -33,8 +30,8 @@ class DriveGains:
         std: their standard deviations (``inf``: not determined).
         motors: the transmission ``K`` the currents go through (the identity: the
             currents are the joints' own).
-        method: how the equations were solved (``"ordinary"``, ``"total"``,
-            ``"physical"``).
+        method: how the equations were solved, the method's word (``"likelihood"``,
+            ``"total"``, ``"ordinary"``, ``"physical"``: :data:`~._solvers.GAIN_METHODS`).
         payload10: the payload's ``XX YY ZZ XY XZ YZ M MX MY MZ`` in ``link``'s frame,
             its mass (and first moments with a known centre of mass) as given.
         payload_std10: their standard deviations (0 for the given ones).
@@ -120,7 +117,7 @@ class DriveGains:
                   "inf" if not np.isfinite(r) else f"{100 * r:.3g}", "yes" if ok else "NO"]
                  for i, (g, s, r, ok) in enumerate(zip(self.gains, self.std,
                                                        self.relative_std, self.calibrated))]
-        head = (f"drive gains (torque per unit recorded) by {METHOD_NAMES[self.method]}, "
+        head = (f"drive gains (torque per unit recorded) by {GAIN_METHODS[self.method].label}, "
                 f"payload {self.settings['mass']:g} kg on {self.settings['link']}")
         return head + "\n\n" + markdown_table(
             [label, "gain", "std", "std [%]", "calibrated"], cells,

@@ -4,21 +4,21 @@ Each joint's rows are divided by its sigma, Gautier's two-step estimate (the RMS
 joint's residual after an unweighted fit, then once more after the fit so weighted;
 compressed once, :mod:`._compressed`). On the weighted rows ``W theta ~ b``:
 
-- ``"ordinary"``: least squares (minimum norm, columns scaled to unit norm). The currents
-  are in the gains' columns: an errors-in-variables fit, whose gains the currents' noise
-  biases toward zero (:mod:`._likelihood`).
-- ``"total"``: total least squares of the homogeneous system ``[W, -b] [theta; 1] = 0``
-  (Gautier & Briot 2014; FIGAROH's drive-gain step): the right singular vector of the
-  smallest singular value of the column-scaled ``[W, -b]``, normalised so that the known
-  payload's coefficient is 1. It treats every column as noisy, the regressor's as much as
-  the currents'.
-- ``"likelihood"``: the maximum likelihood for noise in the currents (:mod:`._likelihood`),
-  from the total least squares' estimate.
-- ``"physical"``: the maximum likelihood's gains, then the model's values at those gains
-  over the payloads a real body can be (its pseudo-inertia positive semidefinite,
-  Wensing, Kim & Slotine, IEEE RA-L 2018) with its mass (and centre of mass) as known, and
-  the model's terms' coefficients ``>= 0`` where a physical body has them so (a conic
-  programme, Clarabel through cvxpy).
+- :class:`OrdinaryGains` (``ordinary``): least squares (minimum norm, columns scaled to
+  unit norm). The currents are in the gains' columns: an errors-in-variables fit, whose
+  gains the currents' noise biases toward zero (:mod:`._likelihood`).
+- :class:`TotalGains` (``total``): total least squares of the homogeneous system
+  ``[W, -b] [theta; 1] = 0`` (Gautier & Briot 2014; FIGAROH's drive-gain step): the right
+  singular vector of the smallest singular value of the column-scaled ``[W, -b]``,
+  normalised so that the known payload's coefficient is 1. It treats every column as
+  noisy, the regressor's as much as the currents'.
+- :class:`LikelihoodGains` (``likelihood``, the default): the maximum likelihood for noise
+  in the currents (:mod:`._likelihood`), from the total least squares' estimate.
+- :class:`PhysicalGains` (``physical``): the maximum likelihood's gains, then the model's
+  values at those gains over the payloads a real body can be (its pseudo-inertia positive
+  semidefinite, Wensing, Kim & Slotine, IEEE RA-L 2018) with its mass (and centre of mass)
+  as known, and the model's terms' coefficients ``>= 0`` where a physical body has them
+  so (a conic programme, Clarabel through cvxpy).
 
 The standard deviations are those of the least squares (or of the likelihood's
 linearisation) at the returned estimate (:func:`~._compressed.std`).
@@ -26,9 +26,12 @@ linearisation) at the returned estimate (:func:`~._compressed.std`).
 
 from __future__ import annotations
 
+import abc
 import dataclasses
 import time
+from typing import ClassVar
 
+import equinox as eqx
 import numpy as np
 
 from ...dynamics._inertia import pseudo_inertia
@@ -38,9 +41,6 @@ from .._payload._least_squares import LinearFit, pseudo_inertia_map
 from ._compressed import compress
 from ._equations import GainEquations, payload_columns
 from ._likelihood import gain_map, maximum_likelihood
-
-#: The ways to solve the equations (module docstring).
-GAIN_METHODS = ("ordinary", "total", "likelihood", "physical")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -154,25 +154,90 @@ def physical(eq: GainEquations, fit: LinearFit) -> tuple[np.ndarray, dict]:
         "seconds": time.perf_counter() - t0}
 
 
-def solve(eq: GainEquations, method: str) -> Solution:
-    """The equations ``eq`` solved by ``method`` (one of :data:`GAIN_METHODS`)."""
-    if method not in GAIN_METHODS:
-        raise ValueError(f"method must be one of {GAIN_METHODS}, got {method!r}")
+class AbstractGainMethod(eqx.Module):
+    """A way to solve the drive gains' equations (module docstring): :meth:`solve`."""
+
+    name: eqx.AbstractClassVar[str]   # the command's ``--method`` word, the report's
+    label: eqx.AbstractClassVar[str]  # what the text calls it
+
+    @abc.abstractmethod
+    def solve(self, eq: GainEquations) -> Solution:
+        """The equations ``eq`` solved, on Gautier's weighted rows."""
+
+    def first_stage(self) -> AbstractGainMethod:
+        """The method of the first of two stages (a term waiting for fitted values)."""
+        return self
+
+
+class OrdinaryGains(AbstractGainMethod):
+    """Least squares of the weighted rows (module docstring): the currents' noise biases
+    the gains toward zero."""
+
+    name: ClassVar[str] = "ordinary"
+    label: ClassVar[str] = "ordinary least squares"
+
+    def solve(self, eq: GainEquations) -> Solution:
+        W, b, rows, report = weighted_rows(eq)
+        theta = LinearFit.of(W, b).x
+        return Solution(theta, W, W @ theta - b, rows, np.eye(W.shape[1]), report)
+
+
+class TotalGains(AbstractGainMethod):
+    """Total least squares (Gautier & Briot 2014; module docstring)."""
+
+    name: ClassVar[str] = "total"
+    label: ClassVar[str] = "total least squares"
+
+    def solve(self, eq: GainEquations) -> Solution:
+        W, b, rows, report = weighted_rows(eq)
+        theta = total(W, b)
+        return Solution(theta, W, W @ theta - b, rows, np.eye(W.shape[1]), report)
+
+
+class LikelihoodGains(AbstractGainMethod):
+    """The maximum likelihood for noise in the currents, from the total least squares'
+    estimate (:mod:`._likelihood`): the default."""
+
+    name: ClassVar[str] = "likelihood"
+    label: ClassVar[str] = "maximum likelihood (noise in the currents)"
+
+    def solve(self, eq: GainEquations) -> Solution:
+        return _likelihood(eq, physical_payload=False)
+
+
+class PhysicalGains(AbstractGainMethod):
+    """The maximum likelihood's gains, the model's values refitted over physically
+    consistent payloads of the given mass (module docstring)."""
+
+    name: ClassVar[str] = "physical"
+    label: ClassVar[str] = "maximum likelihood, the payload physically consistent"
+
+    def solve(self, eq: GainEquations) -> Solution:
+        return _likelihood(eq, physical_payload=True)
+
+    def first_stage(self) -> AbstractGainMethod:
+        return LikelihoodGains()
+
+
+#: The command's words for the methods (module docstring).
+GAIN_METHODS: dict[str, type[AbstractGainMethod]] = {
+    m.name: m for m in (OrdinaryGains, TotalGains, LikelihoodGains, PhysicalGains)}
+
+
+def weighted_rows(eq: GainEquations) -> tuple[np.ndarray, np.ndarray, int, dict]:
+    """``eq``'s rows compressed and divided by Gautier's sigma: ``(W, b, rows, report)``
+    (``rows``: the rows they stand for)."""
     R, T, acting = compressed_rows(eq)
     sigma = gautier(R, T, acting)
     W, b = weighted(R, sigma)
-    identity = np.eye(W.shape[1])
-    rows = T * R.shape[0]
-    report: dict = {"sigma": sigma.tolist()}
-    if method == "ordinary":
-        theta = LinearFit.of(W, b).x
-        return Solution(theta, W, W @ theta - b, rows, identity, report)
-    theta = total(W, b)
-    if method == "total":
-        return Solution(theta, W, W @ theta - b, rows, identity, report)
-    problem, x, h, s, found = maximum_likelihood(eq, theta)
+    return W, b, T * R.shape[0], {"sigma": sigma.tolist()}
+
+
+def _likelihood(eq: GainEquations, physical_payload: bool) -> Solution:
+    W, b, _, report = weighted_rows(eq)
+    problem, x, h, s, found = maximum_likelihood(eq, total(W, b))
     report = {**report, **found}
-    if method == "physical":
+    if physical_payload:
         x, solved = physical(eq, LinearFit.of(*problem.rows(h, s)))
         report["solver"] = solved
     return Solution(np.r_[x, 1.0 / h], problem.jacobian(x, h, s), problem.residual(x, h, s),
