@@ -49,6 +49,8 @@ BY_PHASE = "the same candidates chosen by phase folds alone"
 PREVIOUS = "0.4's default: phase folds, unconstrained"
 PLAIN = "OLS, Coulomb + viscous"
 SETTINGS = (DEFAULT, BY_SPEED, BY_PHASE, PREVIOUS, PLAIN)
+#: ``--settings``' words for them.
+WORDS = dict(zip(("default", "speed", "phase", "previous", "plain"), SETTINGS))
 
 
 def datasets(tmp: Path):
@@ -77,8 +79,9 @@ def subset(data: sj.Measurements, mask) -> sj.Measurements:
                            data.tau[mask])
 
 
-def fits(robot, train: sj.Measurements, limits, transmission, base, inner) -> dict:
-    """The settings on ``train``: the reports of the choices, plain OLS's
+def fits(robot, train: sj.Measurements, limits, transmission, base, inner,
+         settings=SETTINGS) -> dict:
+    """The ``settings`` on ``train``: the reports of the choices, plain OLS's
     identification; ``inner``: the phase folds (a count, or labels) of the choices by
     phase folds and of the default's second validation."""
     models = candidate_models(robot, transmission=transmission, base=base)
@@ -86,29 +89,33 @@ def fits(robot, train: sj.Measurements, limits, transmission, base, inner) -> di
     phase = sj.GivenFolds(inner) if np.ndim(inner) == 1 else sj.PhaseFolds(inner)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        default = sj.select_and_identify(robot, train, validation=sj.Pooled(
-            (phase, sj.SpeedSplits())), **common)
-        by_speed = sj.select_and_identify(robot, train, validation=sj.SpeedSplits(),
-                                          **common)
-        by_phase = sj.select_and_identify(robot, train, validation=phase, **common)
-        previous = sj.select_and_identify(robot, train, physical=False, validation=phase,
-                                          **common)
-        model = sj.TorqueModel.of(robot, transmission=transmission, base=base)
-        plain = sj.identify(robot, train, sj.OLS(), model, limits=limits.torque_limits)
-    return {DEFAULT: default, BY_SPEED: by_speed, BY_PHASE: by_phase, PREVIOUS: previous,
-            PLAIN: plain}
+        # the default: its candidates, then friction at rest kept unless worse
+        made = {DEFAULT: lambda: sj.select_and_identify(
+                    robot, train, validation=sj.identification.DefaultValidation(
+                        interpolation=phase), **common),
+                BY_SPEED: lambda: sj.select_and_identify(
+                    robot, train, validation=sj.SpeedSplits(), **common),
+                BY_PHASE: lambda: sj.select_and_identify(robot, train, validation=phase,
+                                                         **common),
+                PREVIOUS: lambda: sj.select_and_identify(
+                    robot, train, physical=False, validation=phase, **common),
+                PLAIN: lambda: sj.identify(robot, train, sj.OLS(), sj.TorqueModel.of(
+                    robot, transmission=transmission, base=base),
+                    limits=limits.torque_limits)}
+        return {k: made[k]() for k in settings}
 
 
 def _ident(fit):
     return fit if isinstance(fit, sj.Identification) else fit.ident
 
 
-def evaluate(name, robot, data, limits, transmission, runs, folds=5) -> dict:
+def evaluate(name, robot, data, limits, transmission, runs, folds=5,
+             settings=SETTINGS) -> dict:
     base = sj.base_parameters(robot)
     t0 = time.perf_counter()
     phase = sj.PhaseFolds(folds).splits([data])
     speed = sj.SpeedSplits().splits([data])
-    held: dict = {"phase": {k: [] for k in SETTINGS}, "speed": {k: [] for k in SETTINGS}}
+    held: dict = {"phase": {k: [] for k in settings}, "speed": {k: [] for k in settings}}
     chosen: dict = {"phase": [], "speed": []}
     predicted: dict = {"phase": [], "speed": []}
     for kind, splits in (("phase", phase), ("speed", speed)):
@@ -116,13 +123,14 @@ def evaluate(name, robot, data, limits, transmission, runs, folds=5) -> dict:
             # phase: the inner folds are the outer ones left; speed: the slow part's own
             inner = (np.searchsorted(np.unique(phase.labels[train]), phase.labels[train])
                      if kind == "phase" else folds)
-            found = fits(robot, subset(data, train), limits, transmission, base, inner)
+            found = fits(robot, subset(data, train), limits, transmission, base, inner,
+                         settings)
             for label, fit in found.items():
                 held[kind][label].append(nrms(_ident(fit), subset(data, test), limits))
             chosen[kind].append({**found[DEFAULT].selection.chosen})
             predicted[kind].append(found[DEFAULT].cross_validation.score)
     nested_s = time.perf_counter() - t0
-    full = fits(robot, data, limits, transmission, base, folds)
+    full = fits(robot, data, limits, transmission, base, folds, settings)
     other_runs = {run: {label: nrms(_ident(f), d, limits) for label, f in full.items()}
                   for run, d in runs.items()}
     report = full[DEFAULT]
@@ -137,9 +145,9 @@ def evaluate(name, robot, data, limits, transmission, runs, folds=5) -> dict:
         "predicted_percent": report.cross_validation.score,
         "predicted_standard_error": report.cross_validation.standard_error,
         "part_scores": report.cross_validation.part_scores,
-        "by_speed_choice_on_all_data": full[BY_SPEED].selection.chosen,
-        "by_phase_choice_on_all_data": full[BY_PHASE].selection.chosen,
-        "previous_choice_on_all_data": full[PREVIOUS].selection.chosen,
+        **{key: full[k].selection.chosen for key, k in (
+            ("by_speed_choice_on_all_data", BY_SPEED), ("by_phase_choice_on_all_data", BY_PHASE),
+            ("previous_choice_on_all_data", PREVIOUS)) if k in full},
         "fit_percent": report.ident.fit["nrms_limits_percent"], "other_runs": other_runs,
         "candidates": [{"settings": s, "score": cv.score, "se": cv.standard_error,
                         **cv.part_scores, "n_parameters": cv.n_parameters}
@@ -151,27 +159,36 @@ def evaluate(name, robot, data, limits, transmission, runs, folds=5) -> dict:
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", default="benchmarks/results/real_robots.json")
+    ap.add_argument("--settings", default=",".join(WORDS),
+                    help="the settings compared, comma-separated words of "
+                         f"{', '.join(WORDS)} (default: all; 'default' must be one)")
     args = ap.parse_args(argv)
+    words = args.settings.split(",")
+    unknown = [w for w in words if w not in WORDS]
+    if unknown or "default" not in words:
+        ap.error(f"--settings: {unknown or 'default is needed'}; known: {', '.join(WORDS)}")
+    settings = tuple(WORDS[w] for w in words)
     jax.config.update("jax_enable_x64", True)
     import tempfile
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, robot, data, limits, tr, runs in datasets(Path(tmp)):
-            rows.append(evaluate(name, robot, data, limits, tr, runs))
+            rows.append(evaluate(name, robot, data, limits, tr, runs, settings=settings))
             r = rows[-1]
             print(f"{name}: chosen {r['chosen_on_all_data']}, predicted "
                   f"{r['predicted_percent']:.4f} %, nested {r['nested_seconds']:.0f} s",
                   flush=True)
-    print("\n| robot | outer splits | " + " | ".join(SETTINGS) + " |")
-    print("|---|---|" + "---|" * len(SETTINGS))
+    print("\n| robot | outer splits | " + " | ".join(settings) + " |")
+    print("|---|---|" + "---|" * len(settings))
     for r in rows:
         for kind, h in r["nested_held_out_percent"].items():
             print(f"| {r['robot']} | {kind} | "
-                  + " | ".join(f"{h[k]['mean']:.4f}" for k in SETTINGS) + " |")
+                  + " | ".join(f"{h[k]['mean']:.4f}" for k in settings) + " |")
     doc = {"machine": platform.processor() or platform.machine(), "rows": rows,
            "versions": {"sedsabso_jax": sj.__version__},
-           "command": "python -m benchmarks.real_robots"}
+           "command": "python -m benchmarks.real_robots" + (
+               "" if settings == SETTINGS else f" --settings {args.settings}")}
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(to_json(doc))
     print(f"written: {args.json}")

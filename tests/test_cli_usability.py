@@ -282,8 +282,9 @@ def test_model_choice_and_prior_report_each_fit(data_file):
                            validation=sj.identification.DefaultValidation(3),
                            physical=True, prior_strength=1e-3,
                            progress=lambda *call: calls.append(call))
-    # candidates (with the pull to the prior) x (3 speed splits + 3 phase folds), then the fit
-    total = 2 * 2 * (3 + 3) + 1
+    # candidates (with the pull to the prior), then friction at rest kept unless worse, x
+    # (3 speed splits + 3 phase folds), then the fit
+    total = (2 * 2 + 1) * (3 + 3) + 1
     assert [c[1:] for c in calls] == [(k, total) for k in range(1, total + 1)]
     assert calls[0][0] == "OLS physical, viscous-coulomb"
 

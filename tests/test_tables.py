@@ -167,5 +167,6 @@ def test_identify_report(limits):
     report = IdentificationReport.evaluate(ident, data, data, limits, cross_validation=cvs[0],
                                            selection=selection, prior_selection=prior)
     text = report.text()
-    assert len(_tables(text)) == 7 and undefined(text) == []  # the 7th: extrapolation
+    # the 7th: extrapolation, the 8th: rests
+    assert len(_tables(text)) == 8 and undefined(text) == []
     assert "100 RMS error / (2 torque limit)" in " ".join(text.split())

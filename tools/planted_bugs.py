@@ -41,6 +41,7 @@ VALIDATIONS = ["tests/test_validations.py"]
 IDENTIFICATION = ["tests/test_identification.py"]
 SEARCH = ["tests/test_search_methods.py"]
 PAYLOAD = ["tests/test_payload.py"]
+RESTS = ["tests/test_rests.py"]
 
 #: (module, text, replacement, what the bug is, tests to run, reason if equivalent)
 BUGS = [
@@ -334,6 +335,30 @@ BUGS = [
      "            if k + 1 < passes:", "            if k + 1 < 1:",
      "Gautier's weights made once whatever the passes", ["tests/test_identification.py"],
      None),
+    ("identification/_validation/_kept_terms.py",
+     "        fine = [i for i, cv in enumerate(tried) if not_worse(cv, chosen)]",
+     "        fine = list(range(len(tried)))",
+     "kept terms kept however much worse they validate", RESTS, None),
+    ("identification/_validation/_kept_terms.py",
+     "        return min(fine, key=lambda i: tried[i].score) if fine else None",
+     "        return fine[0] if fine else None",
+     "the first kept alternative, not the lowest-scoring", RESTS, None),
+    ("identification/_validation/_selection.py",
+     "    if kept is not None:\n        index = _with_kept(",
+     "    if False:\n        index = _with_kept(",
+     "the default's kept terms never tried", RESTS, None),
+    ("identification/_validation/_rests.py",
+     "        rms_new = np.sqrt(np.sum(shares_new * errors, axis=0))",
+     "        rms_new = np.sqrt(np.sum(shares * errors, axis=0))",
+     "the error weighed to the fitted recording's speeds, not the new motion's",
+     RESTS, None),
+    ("identification/_validation/_rests.py",
+     "            if inside.sum() >= MIN_SAMPLES:", "            if inside.sum() >= 1:",
+     "a band's error from a handful of samples", RESTS, None),
+    ("identification/_validation/_rests.py",
+     "    peak = np.quantile(np.abs(qd), PEAK_QUANTILE, axis=0)",
+     "    peak = np.quantile(np.abs(qd_new), PEAK_QUANTILE, axis=0)",
+     "rests counted against the new motion's peak speed", RESTS, None),
 ]
 
 
@@ -343,6 +368,8 @@ def run(index: int, bug, python: str, keep: bool) -> tuple[str, float]:
     try:
         shutil.copytree(ROOT / "sedsabso_jax", scratch / "sedsabso_jax")
         shutil.copytree(ROOT / "tests", scratch / "tests")
+        for shared in ("benchmarks", "data"):  # some tests read a benchmark's plant
+            shutil.copytree(ROOT / shared, scratch / shared)
         shutil.copy(ROOT / "pyproject.toml", scratch / "pyproject.toml")
         target = scratch / "sedsabso_jax" / module
         source = target.read_text()

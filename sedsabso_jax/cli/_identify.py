@@ -75,6 +75,7 @@ def _choice(args: argparse.Namespace, physical: bool | None, candidates: int) ->
     """The library's :class:`~sedsabso_jax.identification.Choice` of the flags (its rules
     checked, named by the flags), before any data are loaded."""
     from ..identification._default._choice import Choice, DefaultValidation, Names
+    from ..identification._validation._kept_terms import KEPT_TERMS
     from ..identification._validation._splits import PhaseFolds, RecordingFolds, SpeedSplits
 
     names = Names(physical="--physical", prior_strength="--prior-strength",
@@ -85,7 +86,8 @@ def _choice(args: argparse.Namespace, physical: bool | None, candidates: int) ->
                   validation=f"--validation {args.validation}", several="several --data files")
     validation: Any = None  # --folds 0: none
     if args.folds != 0 and args.validation == "pooled":
-        validation = DefaultValidation(args.folds)
+        validation = DefaultValidation(args.folds, None if args.friction != AUTO
+                                       or not args.friction_at_rest else KEPT_TERMS)
     elif args.folds != 0 and args.validation == "phase":
         validation = PhaseFolds(args.folds)
     elif args.folds != 0:
@@ -185,7 +187,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        "TERM or TERM:OPTION (smooth:fit and stribeck:fit search each "
                        "joint's velocity scale, smooth:0.05 and stribeck:0.1 fix it, "
                        "load:viscous adds viscous friction growing with the load); auto "
-                       f"(default): chosen by validation among {candidates}")
+                       f"(default): chosen by validation among {candidates}, then "
+                       "friction at rest (presliding:fit:0.02) added and kept unless it "
+                       "validates worse")
+    model.add_argument("--no-friction-at-rest", dest="friction_at_rest",
+                       action="store_false",
+                       help="with --friction auto, do not add friction at rest to the choice")
     est = ip.add_argument_group("estimator")
     est.add_argument("--method", choices=(AUTO, *Estimator.registered()), default=AUTO,
                      help="estimator; auto (default): OLS or WLS, chosen by validation")

@@ -70,9 +70,13 @@ from ._search._methods import PopulationSearch as PopulationSearch
 from ._validation._cross_validation import CrossValidation as CrossValidation
 from ._validation._extrapolation import Extrapolation as Extrapolation
 from ._validation._extrapolation import extrapolation as extrapolation
+from ._validation._kept_terms import KEPT_TERMS as KEPT_TERMS
+from ._validation._kept_terms import KeptTerms as KeptTerms
 from ._validation._phase import DEFAULT_FOLDS as DEFAULT_FOLDS
 from ._validation._phase import phase_folds as phase_folds
 from ._validation._phase import repeat_period as repeat_period
+from ._validation._rests import Rests as Rests
+from ._validation._rests import rests as rests
 from ._validation._selection import ESTIMATOR_CANDIDATES as ESTIMATOR_CANDIDATES
 from ._validation._selection import PRIOR_STRENGTHS as PRIOR_STRENGTHS
 from ._validation._selection import PriorSelection as PriorSelection
@@ -91,5 +95,5 @@ __all__ = [
     "PAYLOAD_PARAMETERS", "Projection", "AbstractSearch", "CoordinateSearch",
     "PopulationSearch", "LeastSquaresSearch", "dahl_state", "increments", "GAIN_METHODS",
     "AbstractGainMethod", "LikelihoodGains", "TotalGains", "OrdinaryGains", "PhysicalGains",
-    "CALIBRATED_STD",
+    "CALIBRATED_STD", "KeptTerms", "KEPT_TERMS", "rests", "Rests",
 ]

@@ -9,9 +9,9 @@ without a new product with ``W`` (``W (x + s V) = W x + s W V``).
 What the swarms call: :meth:`AbstractFitness.evaluate` (raw fitness of a population)
 and :meth:`AbstractFitness.evaluate_with_antennae` (that and the beetles' antenna
 difference, Eq. 12, at the same points; for Eq. 17 from ``W x``, ``W v`` and one pass over
-the residuals). Every matrix product asks for ``Precision.HIGHEST``: float32 stays float32 on a GPU or TPU (no
-TF32 / bfloat16 passes), so the fitness reported is Eq. 17 at the returned point to
-float32 rounding on every backend.
+the residuals). Every matrix product asks for ``Precision.HIGHEST``: float32 stays
+float32 on a GPU or TPU (no TF32 / bfloat16 passes), so the fitness reported is Eq. 17
+at the returned point to float32 rounding on every backend.
 """
 
 from __future__ import annotations

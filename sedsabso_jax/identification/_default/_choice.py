@@ -15,6 +15,7 @@ from ...measurements._container import Measurements
 from .._estimators._estimator import Estimator, Sigma
 from .._estimators._least_squares import PhysicallyConsistent
 from .._options import as_float, as_int, check_count
+from .._validation._kept_terms import KEPT_TERMS, KeptTerms
 from .._validation._phase import DEFAULT_FOLDS
 from .._validation._selection import ESTIMATOR_CANDIDATES
 from .._validation._splits import PhaseFolds, Pooled, RecordingFolds, SpeedSplits, Validation
@@ -61,19 +62,32 @@ class DefaultValidation(eqx.Module):
     """What :func:`~sedsabso_jax.select_and_identify` chooses by unless told, made for
     the recordings (:meth:`of`): ``Pooled((PhaseFolds(folds), SpeedSplits()))``, with
     :class:`~sedsabso_jax.RecordingFolds` (leave one recording out) instead of the phase folds
-    for several recordings."""
+    for several recordings (``interpolation``: that part given, e.g.
+    :class:`~sedsabso_jax.GivenFolds`); then, where it chooses among several torque models,
+    ``kept`` (:class:`~sedsabso_jax.identification.KeptTerms`, default
+    :data:`~sedsabso_jax.identification.KEPT_TERMS`: friction at rest with its
+    displacements searched; None: nothing) added to the choice and kept unless it
+    validates worse."""
 
     folds: int = eqx.field(default=DEFAULT_FOLDS, converter=as_int)
+    kept: KeptTerms | None = KEPT_TERMS
+    interpolation: Validation | None = None
     kind: ClassVar[str] = "default"
     min_recordings: ClassVar[int] = 1
 
     def __check_init__(self):
         check_count("folds", self.folds, 2)
+        if self.kept is not None and not isinstance(self.kept, KeptTerms):
+            raise TypeError(f"kept must be KeptTerms(...) or None, got {self.kept!r}")
+        if self.interpolation is not None and not isinstance(self.interpolation, Validation):
+            raise TypeError(f"interpolation must be a Validation (PhaseFolds(), "
+                            f"GivenFolds(labels), ...) or None, got {self.interpolation!r}")
 
     def of(self, recordings: Sequence[Measurements]) -> Validation:
         """The validation of ``recordings``."""
-        interpolation: Validation = (RecordingFolds() if len(recordings) > 1
-                                     else PhaseFolds(self.folds))
+        interpolation: Validation = (
+            self.interpolation if self.interpolation is not None
+            else RecordingFolds() if len(recordings) > 1 else PhaseFolds(self.folds))
         return Pooled((interpolation, SpeedSplits()))
 
 

@@ -28,6 +28,7 @@ from .._fit._uncertainty import relative_std_percent
 from .._metrics import Metrics, validation_metrics
 from .._recordings import joined, stacked
 from .._validation._extrapolation import Extrapolation, extrapolation
+from .._validation._rests import Rests, rests
 from .._validation._selection import CrossValidation, PriorSelection, Selection
 
 if TYPE_CHECKING:
@@ -69,7 +70,8 @@ MODEL_UNITS = ("extra terms in N m for a torque offset OFF, N m s^2/rad^2 for ve
 #: The units of the terms beyond :data:`MODEL_UNITS`, written where the model has them.
 MORE_UNITS = {"FS": "N m for Stribeck's excess friction FS",
               "FL": "N m per N m transmitted for friction growing with the load FL",
-              "FLV": "s/rad for viscous friction growing with the load FLV"}
+              "FLV": "s/rad for viscous friction growing with the load FLV",
+              "FP": "N m for friction at rest FP (the torque it saturates at)"}
 
 
 def model_units(names: Sequence[str]) -> str:
@@ -162,6 +164,11 @@ def _described(cv: CrossValidation) -> str:
     return text
 
 
+#: How the report words the kept terms' stage (:class:`~sedsabso_jax.identification.KeptTerms`).
+KEPT_RULE = ("; then the last rows: terms real drives have, friction at rest, added to "
+             "that choice and kept unless their excess over it is above one standard error")
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class IdentificationReport:
     """An identification judged on its own data and, when given, on held-out data.
@@ -188,6 +195,9 @@ class IdentificationReport:
     #: how far ``held_out`` goes beyond ``data``
     #: (:func:`~.._validation._extrapolation.extrapolation`)
     extrapolation: Extrapolation | None = None
+    #: how much more ``held_out`` rests than ``data``, and the validated error weighed
+    #: to its speeds (:func:`~.._validation._rests.rests`)
+    rests: Rests | None = None
 
     @classmethod
     def evaluate(cls, ident: Identification, data: Measurements | Sequence[Measurements],
@@ -199,11 +209,17 @@ class IdentificationReport:
         offsets where the model has one per recording) and of ``held_out``, and compare;
         with ``held_out``, measure how far it goes beyond ``data``
         (:func:`~sedsabso_jax.identification.extrapolation`) and warn when a joint is beyond the
-        thresholds."""
+        thresholds, and how much more it rests (:func:`~sedsabso_jax.identification.rests`:
+        the validated error weighed to its speeds, a warning where it rests more)."""
         recordings = [data] if isinstance(data, Measurements) else list(data)
         data = joined(recordings)
         beyond = None if held_out is None else extrapolation(
             data, held_out, joint_names=ident.model.robot.joint_names, warn=True)
+        at_rest = None if held_out is None else rests(
+            data, held_out, cross_validation=cross_validation if cross_validation is not None
+            and cross_validation.residuals is not None else None,
+            limits=None if limits is None else np.asarray(limits, dtype=float),
+            joint_names=ident.model.robot.joint_names, warn=True)
         index = stacked(recordings)[-1] if len(recordings) > 1 else None
         fit_pred = ident.model.predict(ident.values, data.q, data.qd, data.qdd, index)
         val_pred = None if held_out is None else ident.predict(held_out.q, held_out.qd,
@@ -213,7 +229,7 @@ class IdentificationReport:
                    None if held_out is None else validation_metrics(
                        held_out.tau, val_pred, limits),  # type: ignore[arg-type]
                    (fit_pred, val_pred), cross_validation, selection, prior_selection,
-                   beyond)
+                   beyond, at_rest)
 
     def text(self) -> str:
         """The parameters and per-joint metrics as markdown tables, each with a note that
@@ -258,9 +274,10 @@ class IdentificationReport:
         if self.selection is not None:
             sel = self.selection
             parts = sel.parts if len(sel.parts) > 1 else ()
+            kept = any(st.get("kept_terms") for st, _ in sel.candidates)
             lines += ["", f"chosen by {' and '.join(sel.parts)} (the simplest whose "
                           f"split-by-split excess over the lowest is within one standard "
-                          f"error):", "",
+                          f"error{KEPT_RULE if kept else ''}):", "",
                       markdown_table(["method", "sigma", "physical", "friction", "parameters",
                                       "error [%]", *(f"{k} [%]" for k in parts), "choice"],
                                      sel.table()),
@@ -301,6 +318,16 @@ class IdentificationReport:
             message = self.extrapolation.message()
             if message is not None:
                 lines += ["", f"warning: {message}"]
+        if self.rests is not None:
+            lines += ["", "rests (the share of samples at rest and slow, per joint):", "",
+                      self.rests.table(), "", self.rests.note()]
+            if self.rests.predicted is not None:
+                lines += ["", f"predicted error on the validation data, the validated "
+                              f"error weighed to their speeds: {self.rests.predicted:.4f} % "
+                              f"({self.rests.factor:.2f} x the validated error)"]
+            message = self.rests.message()
+            if message is not None:
+                lines += ["", f"warning: {message}"]
         if self.limits is None:
             lines += ["", "NRMS over torque limits: no limits known for this robot"]
         return "\n".join(lines)
@@ -323,6 +350,7 @@ class IdentificationReport:
             "settings": {**settings, **ident.settings},
             "extrapolation": None if self.extrapolation is None
             else self.extrapolation.as_dict(),
+            "rests": None if self.rests is None else self.rests.as_dict(),
         })
 
     def figures(self) -> dict:

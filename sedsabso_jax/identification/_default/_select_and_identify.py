@@ -76,7 +76,13 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
        recordings), where the model interpolates, with :class:`~sedsabso_jax.SpeedSplits`,
        where it must extrapolate in speed as on a faster motion: its score is the error to
        expect on new motions, and the report gives each part's too. With one candidate, it
-       is only validated (``validation=None``: not at all).
+       is only validated (``validation=None``: not at all). Then the default
+       validation's ``kept`` terms (friction at rest with its displacements searched,
+       :data:`~sedsabso_jax.identification.KEPT_TERMS`;
+       ``DefaultValidation(kept=None)``: none) are added to the choice among several
+       torque models and kept unless they validate worse: a validation on an excitation
+       recording, which barely rests, cannot show what the term does on motions that
+       rest, and every real drive has it.
     2. ``prior_strength``, a number or ``"cv"`` (chosen from
        :data:`~sedsabso_jax.identification.PRIOR_STRENGTHS` by the same validation,
        :func:`~sedsabso_jax.choose_prior_strength`), pulls a physically consistent fit
@@ -105,6 +111,8 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
                     len(recordings), any(m.recordings > 1 for m in models))
     estimators = choice.estimators(estimators)
     chosen_by = choice.validation_of(recordings)
+    kept = (validation.kept if isinstance(validation, DefaultValidation)
+            and len(models) > 1 else None)
     # the fits after the model choice, for the progress: the prior's validation, the fit
     later = 1 + (len(PRIOR_STRENGTHS) * len(chosen_by.splits(recordings))
                  if progress is not None and chosen_by is not None
@@ -116,7 +124,7 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
         estimator, model = estimators[0], models[0]
     else:
         selection = select_model(robot, recordings, models=models, estimators=estimators,
-                                 validation=chosen_by, limits=limits,
+                                 validation=chosen_by, limits=limits, kept=kept,
                                  progress=stages.stage(later))
         estimator, model = selection.estimator, selection.model
         cv = selection.cross_validation

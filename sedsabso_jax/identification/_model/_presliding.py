@@ -9,12 +9,20 @@ import jax.numpy as jnp
 
 from ._dahl import dahl_state, presliding_state
 from ._scales import AbstractScale, as_scale
-from ._term import ModelView, Signals, diagonal
+from ._term import AbstractTerm, ModelView, Signals, diagonal
 
 #: Characteristic displacement (rad or m) of :class:`Presliding` unless told.
 PRESLIDING_DISPLACEMENT = 0.002
 #: How :class:`Presliding`'s state may be integrated.
 SCANS = ("auto", "sequential", "associative")
+#: The largest displacement (rad or m) the default's friction at rest searches
+#: (``Presliding(fitted=True, largest=...)``, :data:`~.._validation._kept_terms.KEPT_TERMS`):
+#: presliding is the contacts' small elastic deformation before they slide; searched up
+#: to 0.5 rad, four of the KUKA LWR4+'s seven displacements ended at 100-500 mrad, a slow
+#: hysteresis that missed held-out stretches of its motion by up to 32 % more than the
+#: model without it, while up to 20 mrad it matched or beat that model on each
+#: (docs/explanation/identification-defaults.md).
+LARGEST_AT_REST = 0.02
 
 
 class Presliding(AbstractScale):
@@ -26,7 +34,8 @@ class Presliding(AbstractScale):
     adds what sliding friction does not predict: the torque held while the joint stands
     still and the gradual reversal. ``displacement`` is ``q_c`` (rad or m, > 0: one, one
     per joint, or with ``fitted=True`` one per joint searched by the fit within
-    :attr:`bounds`). The columns read each recording's samples in time order, whole: a
+    :attr:`bounds`, up to ``largest`` where given: ``presliding:fit:0.02`` in the
+    command line's text). The columns read each recording's samples in time order, whole: a
     subset's rows are the whole recording's, taken. ``scan``: how the state is
     integrated, ``"sequential"`` (a ``lax.scan``), ``"associative"`` (a prefix
     composition, parallel in time) or ``"auto"``, per backend (:data:`~._dahl.SEQUENTIAL`)."""
@@ -35,6 +44,7 @@ class Presliding(AbstractScale):
                                                         converter=as_scale)
     fitted: bool = False
     scan: str = "auto"
+    largest: float | None = None
     name: ClassVar[str] = "presliding"
     nonnegative: ClassVar[bool] = True
     #: The displacements' search box (rad or m).
@@ -47,6 +57,33 @@ class Presliding(AbstractScale):
     def __check_init__(self):  # equinox also runs AbstractScale's
         if self.scan not in SCANS:
             raise ValueError(f"Presliding's scan must be one of {SCANS}, got {self.scan!r}")
+        if self.largest is not None and not (
+                self.fitted and isinstance(self.largest, float)
+                and self.bounds[0] < self.largest <= self.bounds[1]):
+            raise ValueError(f"Presliding's largest must be a number in ({self.bounds[0]:g}, "
+                             f"{self.bounds[1]:g}] with fitted=True, got {self.largest!r} "
+                             f"(fitted={self.fitted!r})")
+
+    def search_bounds(self) -> tuple[float, float]:
+        lo, hi = self.bounds
+        return (lo, hi) if self.largest is None else (lo, self.largest)
+
+    @property
+    def text(self) -> str:
+        base = super().text
+        return base if self.largest is None else f"{base}:{self.largest:g}"
+
+    @classmethod
+    def parse(cls, option: str | None) -> AbstractTerm:
+        if option is not None and option.startswith("fit:"):
+            try:
+                largest = float(option[4:])
+            except ValueError:
+                raise ValueError(f"friction term 'presliding': expected presliding:fit:LARGEST "
+                                 f"(rad, the largest displacement searched), got "
+                                 f"presliding:{option}") from None
+            return cls(fitted=True, largest=largest)
+        return super().parse(option)
 
     def names(self, model: ModelView) -> tuple[str, ...]:
         n = model.robot.n_joints
@@ -66,4 +103,6 @@ class Presliding(AbstractScale):
 
     def settings(self) -> dict:
         out = super().settings()
+        if self.largest is not None:
+            out["presliding_largest"] = self.largest
         return out if self.scan == "auto" else {**out, "presliding_scan": self.scan}

@@ -65,6 +65,11 @@ class AbstractScale(AbstractTerm):
                              f"per joint ({n}), got {len(v)}")
         return xp.broadcast_to(v, (n,))
 
+    def search_bounds(self) -> tuple[float, float]:
+        """The box the fit searches the scales in (:attr:`bounds` unless a term narrows
+        it)."""
+        return self.bounds
+
     @property
     def text(self) -> str:
         v = self.scale
@@ -93,7 +98,7 @@ class AbstractScale(AbstractTerm):
         if not self.fitted:
             return None
         n = model.robot.n_joints
-        lo, hi = self.bounds
+        lo, hi = self.search_bounds()
         return Nonlinear(tuple(f"{self.symbol}{j + 1}" for j in range(n)),
                          np.clip(self.per_joint(n), lo, hi), np.full(n, lo), np.full(n, hi),
                          self.scale_unit)

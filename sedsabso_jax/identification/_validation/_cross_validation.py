@@ -44,6 +44,9 @@ class CrossValidation:
         estimator, model: what was validated.
         validation: the validation's settings (``kind`` and its options);
             ``split_names`` one per split.
+        residuals, tested: the predicted samples' errors (measured - predicted, ``(N,
+            n)``, each split's stacked) and their indices into the validated samples
+            (``(N,)``; a sample predicted by several splits appears once per split).
     """
 
     metrics: Metrics
@@ -57,6 +60,8 @@ class CrossValidation:
     validation: dict = dataclasses.field(default_factory=lambda: {"kind": "phase folds"})
     split_names: tuple[str, ...] = ()
     split_parts: tuple[str, ...] = ()
+    residuals: np.ndarray | None = dataclasses.field(default=None, repr=False)
+    tested: np.ndarray | None = dataclasses.field(default=None, repr=False)
 
     @property
     def part_scores(self) -> dict[str, float]:
@@ -103,7 +108,8 @@ def cross_validation_of(estimator: Estimator, model: TorqueModel, samples: Sampl
     """Fit ``estimator`` and ``model`` to each split's training samples of ``samples``
     (the recordings, stacked) and predict its test samples; ``validation`` the settings
     of the validation that made the splits; ``on_fit()`` after each fit."""
-    measured, predicted, scores = [], [], []
+    measured, predicted, scores, tested = [], [], [], []
+    every = np.arange(samples.q.shape[0])
     # many small factorisations: one BLAS thread each (OpenBLAS's threads made the KUKA
     # LWR4+'s default identify 1.3x slower on 2 idle cores); the user's setting is
     # restored on leaving
@@ -113,16 +119,19 @@ def cross_validation_of(estimator: Estimator, model: TorqueModel, samples: Sampl
         for train, test in zip(splits.train, splits.test):
             fitted = fit_model(estimator, model, samples.subset(train), limits, warn=False)
             measured.append(samples.tau[test])
+            tested.append(every[test])
             predicted.append(samples.subset(test).predict(fitted.model, fitted.fit.x))
             scores.append(score_of(validation_metrics(measured[-1], predicted[-1], limits)))
             if on_fit is not None:
                 on_fit()
     settings = {**describe(estimator, model, limits), "sigma": estimator.sigma}
+    measured_all, predicted_all = np.concatenate(measured), np.concatenate(predicted)
     return CrossValidation(
-        metrics=validation_metrics(np.concatenate(measured), np.concatenate(predicted), limits),
+        metrics=validation_metrics(measured_all, predicted_all, limits),
         fold_scores=np.asarray(scores), period_s=splits.period_s, folds=splits.labels,
         n_parameters=model.dim, settings=settings, estimator=estimator, model=model,
-        validation=validation, split_names=splits.names, split_parts=splits.parts)
+        validation=validation, split_names=splits.names, split_parts=splits.parts,
+        residuals=measured_all - predicted_all, tested=np.concatenate(tested))
 
 
 def not_worse(cv: CrossValidation, best: CrossValidation) -> bool:

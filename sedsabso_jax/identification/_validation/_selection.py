@@ -65,6 +65,7 @@ from .._recordings import Data, recordings_of, stacked
 from ._cross_validation import TIE_FRACTION as TIE_FRACTION
 from ._cross_validation import CrossValidation as CrossValidation
 from ._cross_validation import cross_validation_of, not_worse
+from ._kept_terms import KeptTerms
 from ._phase import DEFAULT_FOLDS as DEFAULT_FOLDS
 from ._splits import PhaseFolds, Splits, Validation
 
@@ -192,12 +193,18 @@ class Selection:
         return rows
 
     def as_dict(self) -> dict:
+        kept = any(s.get("kept_terms") for s, _ in self.candidates)
         return {"rule": "simplest candidate (fewest parameters, then physically consistent, "
                         "then the earlier estimator) whose split-by-split excess over the "
                         "lowest validated error is at most one standard error (or 1 % of "
-                        "the lowest)",
+                        "the lowest)" + ("; then the kept terms (the rows with kept_terms) "
+                                         "added to it, kept unless their excess over it is "
+                                         "above one standard error (or 1 % of it)"
+                                         if kept else ""),
                 "chosen": self.chosen, "lowest": self.best,
-                "candidates": [{"settings": s, **cv.as_dict()} for s, cv in self.candidates]}
+                "candidates": [{"settings": s, **cv.as_dict(),
+                                **({"kept_terms": True} if s.get("kept_terms") else {})}
+                               for s, cv in self.candidates]}
 
 
 def simplest_not_worse(scores: Sequence[CrossValidation], physical: Sequence[bool]) -> int:
@@ -216,6 +223,7 @@ def select_model(robot: Robot, data: Data, *,
                  models: TorqueModel | Iterable[TorqueModel] | None = None,
                  estimators: Estimator | Iterable[Estimator] | None = None,
                  validation: Validation = PhaseFolds(), limits: Limits = None,
+                 kept: KeptTerms | None = None,
                  progress: ProgressCallback | None = None) -> Selection:
     """Choose the torque model and the estimator by validation (module docstring).
 
@@ -226,8 +234,11 @@ def select_model(robot: Robot, data: Data, *,
     unconstrained) are the grid, simplest first. Every candidate is scored by
     ``validation`` (default phase folds, as in :func:`cross_validate`; a
     :class:`~._splits.Pooled` validation's parts are scored from the same fits:
-    :attr:`~._cross_validation.CrossValidation.part_scores`). ``progress(label, done, total)`` is
-    called after each fit (``total``: candidates x splits)."""
+    :attr:`~._cross_validation.CrossValidation.part_scores`). ``kept``: terms added to
+    the choice, with its estimator, and kept unless they validate worse
+    (:class:`~._kept_terms.KeptTerms`; their rows come last, ``"kept_terms": True`` in
+    their settings). ``progress(label, done, total)`` is called after each fit
+    (``total``: candidates x splits, and the kept terms' after the choice)."""
     estimators = ESTIMATOR_CANDIDATES if estimators is None else one_or_more(estimators,
                                                                              Estimator)
     limits = per_joint("limits", limits, robot.n_joints)
@@ -238,7 +249,9 @@ def select_model(robot: Robot, data: Data, *,
         model_of(robot, m) for m in one_or_more(models, TorqueModel))
     if not models or not estimators:
         raise ValueError("select_model needs at least one torque model and one estimator")
-    fits = _Fits(progress, len(models) * len(estimators) * len(prepared.splits))
+    fits = _Fits(progress, (len(models) * len(estimators)
+                            + (0 if kept is None else len(kept.alternatives)))
+                 * len(prepared.splits))
     tried, options = [], []
     for model in models:
         for estimator in estimators:
@@ -249,11 +262,30 @@ def select_model(robot: Robot, data: Data, *,
                                 f"{model.friction}")
             tried.append((settings, prepared.validate(estimator, model, limits, on_fit)))
             options.append((estimator, model))
+    index = simplest_not_worse([cv for _, cv in tried], [e.physical for e, _ in options])
+    if kept is not None:
+        index = _with_kept(kept, index, tried, options, prepared, limits, fits)
     best_settings = min(tried, key=lambda c: c[1].score)[0]
-    chosen = tried[simplest_not_worse([cv for _, cv in tried],
-                                      [e.physical for e, _ in options])][0]
+    chosen = tried[index][0]
     return Selection(candidates=tuple(tried), chosen=chosen, best=best_settings,
                      options=tuple(options))
+
+
+def _with_kept(kept: KeptTerms, index: int, tried: list, options: list,
+               prepared: Prepared, limits: np.ndarray | None, fits: _Fits) -> int:
+    """Validate ``kept``'s terms added to candidate ``index`` (appended to ``tried`` and
+    ``options``); the index of the candidate kept."""
+    estimator, model = options[index]
+    found = []
+    for with_terms in kept.models(model):
+        checked_estimator(estimator).check(with_terms, limits)
+        settings = {**tried[index][0], "friction": with_terms.friction, "kept_terms": True}
+        on_fit = fits.after(f"{estimator.name}, {with_terms.friction} (kept unless worse)")
+        tried.append((settings, prepared.validate(estimator, with_terms, limits, on_fit)))
+        options.append((estimator, with_terms))
+        found.append(len(tried) - 1)
+    which = kept.kept(tried[index][1], [tried[i][1] for i in found])
+    return index if which is None else found[which]
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
