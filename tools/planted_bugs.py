@@ -356,8 +356,7 @@ BUGS = [
      "            if inside.sum() >= MIN_SAMPLES:", "            if inside.sum() >= 1:",
      "a band's error from a handful of samples", RESTS, None),
     ("identification/_validation/_rests.py",
-     "    peak = np.quantile(np.abs(qd), PEAK_QUANTILE, axis=0)",
-     "    peak = np.quantile(np.abs(qd_new), PEAK_QUANTILE, axis=0)",
+     "    peak = peak_speed(qd)", "    peak = peak_speed(qd_new)",
      "rests counted against the new motion's peak speed", RESTS, None),
 ]
 

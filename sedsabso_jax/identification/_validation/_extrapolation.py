@@ -163,6 +163,20 @@ def _peak(x: np.ndarray, quantile: float) -> np.ndarray:
     return np.quantile(np.abs(x), 1 - quantile, axis=0) if quantile > 0 else np.abs(x).max(0)
 
 
+def joint_names_of(data: Measurements, held_out: Measurements,
+                   joint_names: Sequence[str] | None) -> tuple[str, ...]:
+    """``joint_names`` (default ``q1, q2, ...``), checked against the joints of ``data``
+    and ``held_out``, which must have as many."""
+    n = data.q.shape[1]
+    if held_out.q.shape[1] != n:
+        raise ValueError(f"data have {n} joints, held_out {held_out.q.shape[1]}")
+    names = tuple(joint_names) if joint_names is not None else tuple(
+        f"q{j + 1}" for j in range(n))
+    if len(names) != n:
+        raise ValueError(f"{len(names)} joint names for {n} joints")
+    return names
+
+
 def extrapolation(data: Measurements, held_out: Measurements, *,
                   joint_names: Sequence[str] | None = None, quantile: float = QUANTILE,
                   warn: bool = False) -> Extrapolation:
@@ -180,13 +194,7 @@ def extrapolation(data: Measurements, held_out: Measurements, *,
     (:meth:`Extrapolation.warn`)."""
     if not 0 <= quantile < 0.5:
         raise ValueError(f"quantile must be in [0, 0.5), got {quantile!r}")
-    n = data.q.shape[1]
-    if held_out.q.shape[1] != n:
-        raise ValueError(f"data have {n} joints, held_out {held_out.q.shape[1]}")
-    names = tuple(joint_names) if joint_names is not None else tuple(
-        f"q{j + 1}" for j in range(n))
-    if len(names) != n:
-        raise ValueError(f"{len(names)} joint names for {n} joints")
+    names = joint_names_of(data, held_out, joint_names)
     lo, hi = _extremes(np.asarray(data.q, float), quantile)
     lo_new, hi_new = _extremes(np.asarray(held_out.q, float), quantile)
     past = np.maximum(np.maximum(lo - lo_new, hi_new - hi), 0.0)

@@ -16,6 +16,7 @@ state mimics its Coulomb jump, the validation says so and the term is dropped.""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 
 import equinox as eqx
@@ -59,8 +60,7 @@ class KeptTerms(eqx.Module):
                 continue
             kinds = {type(t) for t in terms}
             kept = tuple(t for t in model.terms if type(t) not in kinds)
-            out.append(TorqueModel(model.base, kept + tuple(terms), model.transmission,
-                                   model.recordings, model.search))
+            out.append(dataclasses.replace(model, terms=kept + tuple(terms)))
         return tuple(out)
 
     def kept(self, chosen: CrossValidation, tried: Sequence[CrossValidation]) -> int | None:

@@ -19,7 +19,7 @@ over the same weighed by the fitted recording's shares. The validated error time
 ratio (:attr:`Rests.factor`) is the error predicted for the new motion: equal to the
 validated error for a motion with the fitted recording's mix of speeds, larger for one
 that rests more (docs/results/extrapolation.md measures it against the error met).
-Peaks are the 99.5 % quantiles of ``|qd|`` (:data:`~._splits.PEAK_QUANTILE`), as the
+Peaks are the 99.5 % quantiles of ``|qd|`` (:func:`~._splits.peak_speed`), as the
 speed splits take them."""
 
 from __future__ import annotations
@@ -34,7 +34,8 @@ from ... import _deprecation
 from ..._output import columns_note, markdown_table
 from ...measurements._container import Measurements
 from ._cross_validation import CrossValidation
-from ._splits import PEAK_QUANTILE
+from ._extrapolation import joint_names_of
+from ._splits import peak_speed
 
 #: |qd| below this fraction of the fitted peak speed: at rest.
 REST_SPEED = 0.02
@@ -189,15 +190,9 @@ def rests(data: Measurements, held_out: Measurements, *,
     of each joint's weighed RMS error over the limits (``limits``; without, over the RMS
     of its measured torque) divided by the same at ``data``'s own speeds. ``warn``: a
     ``UserWarning`` naming the joints that rest more (:meth:`Rests.warn`)."""
-    n = data.q.shape[1]
-    if held_out.q.shape[1] != n:
-        raise ValueError(f"data have {n} joints, held_out {held_out.q.shape[1]}")
-    names = tuple(joint_names) if joint_names is not None else tuple(
-        f"q{j + 1}" for j in range(n))
-    if len(names) != n:
-        raise ValueError(f"{len(names)} joint names for {n} joints")
+    names = joint_names_of(data, held_out, joint_names)
     qd, qd_new = np.asarray(data.qd, float), np.asarray(held_out.qd, float)
-    peak = np.quantile(np.abs(qd), PEAK_QUANTILE, axis=0)
+    peak = peak_speed(qd)
     count = len(SPEED_BANDS) + 1
     bands, bands_new = _bands(qd, peak), _bands(qd_new, peak)
     shares, shares_new = _shares(bands, count), _shares(bands_new, count)

@@ -45,6 +45,11 @@ FIT_BELOW, PREDICT_ABOVE = 0.7, 0.8
 PEAK_QUANTILE = 0.995
 
 
+def peak_speed(qd: np.ndarray) -> np.ndarray:
+    """Each joint's peak speed: the :data:`PEAK_QUANTILE` quantile of ``|qd|``."""
+    return np.quantile(np.abs(qd), PEAK_QUANTILE, axis=0)
+
+
 @dataclasses.dataclass(frozen=True, eq=False)
 class Splits:
     """Which samples each split fits (``train``) and predicts (``test``): boolean masks
@@ -185,7 +190,7 @@ class SpeedSplits(Validation):
 
     def splits(self, recordings: Sequence[Measurements]) -> Splits:
         qd = np.concatenate([r.qd for r in recordings])
-        peak = np.quantile(np.abs(qd), PEAK_QUANTILE, axis=0)
+        peak = peak_speed(qd)
         moving = np.flatnonzero(peak > 0)
         if moving.size == 0:
             raise ValueError("SpeedSplits: no joint moves in the data")
