@@ -65,6 +65,7 @@ from ._model._term import diagonal as diagonal
 from ._payload._term import PAYLOAD_PARAMETERS as PAYLOAD_PARAMETERS
 from ._search._methods import AbstractSearch as AbstractSearch
 from ._search._methods import CoordinateSearch as CoordinateSearch
+from ._search._methods import Held as Held
 from ._search._methods import LeastSquaresSearch as LeastSquaresSearch
 from ._search._methods import PopulationSearch as PopulationSearch
 from ._validation._cross_validation import CrossValidation as CrossValidation
@@ -92,7 +93,7 @@ __all__ = [
     "DefaultValidation", "nrms_over_limits", "FRICTION_TERMS", "TERMS", "AbstractTerm",
     "AbstractScale", "Signals", "Nonlinear", "diagonal", "Fitted", "SETTLE_RTOL",
     "parse_friction", "figure_torques", "extrapolation", "Extrapolation", "Splits",
-    "PAYLOAD_PARAMETERS", "Projection", "AbstractSearch", "CoordinateSearch",
+    "PAYLOAD_PARAMETERS", "Projection", "AbstractSearch", "CoordinateSearch", "Held",
     "PopulationSearch", "LeastSquaresSearch", "dahl_state", "increments", "GAIN_METHODS",
     "AbstractGainMethod", "LikelihoodGains", "TotalGains", "OrdinaryGains", "PhysicalGains",
     "CALIBRATED_STD", "KeptTerms", "KEPT_TERMS", "rests", "Rests",

@@ -30,6 +30,7 @@ from .._recordings import joined, stacked
 from .._validation._extrapolation import Extrapolation, extrapolation
 from .._validation._rests import Rests, rests
 from .._validation._selection import CrossValidation, PriorSelection, Selection
+from ._stages import stage_lines
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -79,33 +80,6 @@ def model_units(names: Sequence[str]) -> str:
     prefixes = {n.rstrip("0123456789") for n in names}
     more = [unit for prefix, unit in MORE_UNITS.items() if prefix in prefixes]
     return MODEL_UNITS + "".join(f"; {unit}" for unit in more)
-
-
-def stage_lines(settings: dict) -> list[str]:
-    """What the fit's stages did (:mod:`~.._fit._fit`): the nonlinear parameters it
-    searched (value, standard deviation, unit, on a bound; the method and its trials)
-    and where the load of friction growing with it came from."""
-    lines = []
-    searched = settings.get("searched") or {}
-    if searched:
-        def one(name: str, s: dict) -> str:
-            std = "inf" if s["std"] is None else f"{s['std']:.2g}"
-            return (f"{name} = {s['value']:.4g} +- {std} {s['unit']}"
-                    f"{' (on a bound)' * s['at_bound']}")
-
-        found = ", ".join(one(name, s) for name, s in searched["parameters"].items())
-        lines.append(f"nonlinear parameters searched ({searched['method']}, "
-                     f"{searched['evaluations']} trials): {found}")
-    load = settings.get("load")
-    if load:
-        if "settled" in load:
-            state = "settled" if load["settled"] else "NOT settled"
-            lines.append(f"friction growing with the load: the fit's own rigid-body torque "
-                         f"after {load['iterations']} fits ({state})")
-        else:
-            lines.append("friction growing with the load: the rigid-body torque of a least-"
-                         "squares fit without it")
-    return ["", *lines] if lines else []
 
 
 #: The note under the first metrics table (:mod:`._metrics` defines the figures).

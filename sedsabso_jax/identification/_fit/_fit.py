@@ -34,6 +34,7 @@ from ..._deprecation import caller_stacklevel
 from .._estimators._estimator import Estimator, EstimatorFit, FitProblem
 from .._estimators._least_squares import OLS
 from .._model._torque_model import TorqueModel
+from .._search._methods import HELD
 from ._projection import Projection
 from ._samples import Samples
 
@@ -95,9 +96,13 @@ def _searched(model: TorqueModel, samples: Samples, weights: np.ndarray
     problem = Projection.of(model, samples, weights)
     method = model.searched_by
     searched = method.search(problem, start, lower, upper)
+    names = [n for f in found for n in f.names]
+    polished = {} if searched.newton_steps is None else {
+        "newton_steps": searched.newton_steps, "converged": searched.converged,
+        "held": [n for n, h in zip(names, searched.held) if h]}
     return model.with_nonlinear(np.exp(searched.u)), {
         **method.settings(), "evaluations": searched.evaluations, "loss": searched.loss,
-        "seconds": searched.seconds}
+        "seconds": searched.seconds, **polished}
 
 
 def fit(estimator: Estimator, model: TorqueModel, samples: Samples,
@@ -112,8 +117,12 @@ def fit(estimator: Estimator, model: TorqueModel, samples: Samples,
         # sits elsewhere in the model with them
         model = model.reading(np.array([first.get(n, 0.0) for n in model.names]),
                               only=lambda term: term.waiting)
-    if model.nonlinear():
+    if model.nonlinear() and model.searched_by.searches:
         model, report["searched"] = search(estimator, model, samples, limits)
+        # the model carries what it found: fitting it again fits the same model
+        model = dataclasses.replace(model, search=HELD)
+    elif model.nonlinear():
+        report["searched"] = {**model.searched_by.settings(), "evaluations": 0}
     out = linear(estimator, model, samples, limits, warn)
     iterations, change = 1, 0.0
     while model.iterates:

@@ -78,10 +78,13 @@ def std_of_columns(J: Float[np.ndarray, "m d"], s2: float, rtol: float = 1e-10
 
 
 def searched_std(model, out, samples, step: float = 1e-4) -> dict:
-    """Each searched parameter's value, standard deviation and whether it ended on a
-    bound (within :data:`AT_BOUND`): ``s^2 (J^T J)^-1`` of the weighted residual over the
-    log parameters and the linear values together (:func:`std_of_columns`), the
-    parameters' part by central differences of the rows."""
+    """Each searched parameter's value, standard deviation, whether it ended on a bound
+    (within :data:`AT_BOUND`) and whether the data determine it: ``s^2 (J^T J)^-1`` of the
+    weighted residual over the log parameters and the linear values together
+    (:func:`std_of_columns`), the parameters' part by central differences of the rows. A
+    parameter whose standard deviation (in log scale) exceeds its search box's width
+    (``log(upper / lower)``) is not determined: the data cannot place it within the box
+    (e.g. the displacement of a friction at rest fitted as 0); its std is ``inf``."""
     found = [f for _, f in model.nonlinear()]
     names = [n for f in found for n in f.names]
     theta = np.concatenate([f.values for f in found])
@@ -101,10 +104,13 @@ def searched_std(model, out, samples, step: float = 1e-4) -> dict:
     W = (samples.rows(model) / sigma[:, None]).reshape(r.size, -1)
     J = np.concatenate([Jz, W], -1)
     dof = max(r.size - J.shape[1], 1)
-    std = theta * std_of_columns(J, float(r @ r) / dof)[:z.size]  # d theta = theta d z
+    log_std = std_of_columns(J, float(r @ r) / dof)[:z.size]
+    determined = log_std <= np.log(upper / lower)
+    std = np.where(determined, theta * log_std, np.inf)  # d theta = theta d z
     return {name: {"value": float(t), "std": float(s), "unit": u,
-                   "at_bound": bool(t <= lower[i] * AT_BOUND or t >= upper[i] / AT_BOUND)}
-            for i, (name, t, s, u) in enumerate(zip(names, theta, std, unit))}
+                   "at_bound": bool(t <= lower[i] * AT_BOUND or t >= upper[i] / AT_BOUND),
+                   "determined": bool(d)}
+            for i, (name, t, s, u, d) in enumerate(zip(names, theta, std, unit, determined))}
 
 
 def function_std(W: Float[np.ndarray, "m d"], residual: Float[np.ndarray, " m"],

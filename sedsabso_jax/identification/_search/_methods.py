@@ -30,14 +30,17 @@ from ...optim._budget import iterations_for_budget
 from ...optim._driver import minimise
 from ...optim._solver import AbstractSolver
 from .._options import as_float, as_int, check_count, check_number
-from ._problem import Searched, SearchProblem, fitness, losses
+from ._newton import polish
+from ._problem import Searched, SearchProblem, fitness, losses, on_bounds
 
 
 class AbstractSearch(eqx.Module):
     """A method that searches the parameters ``u`` of a :class:`~._problem.SearchProblem`
-    within ``[lower, upper]`` from ``start`` (:meth:`search`)."""
+    within ``[lower, upper]`` from ``start`` (:meth:`search`); ``searches``: False for
+    :class:`Held`, which keeps the model's values and needs no problem."""
 
     label: eqx.AbstractClassVar[str]
+    searches: ClassVar[bool] = True
 
     @abc.abstractmethod
     def search(self, problem: SearchProblem, start: np.ndarray, lower: np.ndarray,
@@ -58,60 +61,101 @@ class CoordinateSearch(AbstractSearch):
     last grid's steps either side of the best (``(points - 1) / 2`` times finer: the
     minimum of a function of one variable lies within a step of its best grid point);
     ``sweeps`` sweeps, the last also trying the vertex of the parabola through each
-    coordinate's best value and its two neighbours on its grid."""
+    coordinate's best value and its two neighbours on its grid; then at most ``newton``
+    steps of Newton's method to the minimum (:func:`~._newton.polish`; 0: none).
+
+    A trial counts as better only where it lowers the loss by more than ``rtol`` of it
+    (the loss's rounding, about 1e-14 of it, never decides), and of trials within that
+    of each other the first on the grid wins: the path, and with the polish the end, do
+    not turn on the last bits of the loss, which differ between processors."""
 
     points: int = eqx.field(default=7, converter=as_int)
     sweeps: int = eqx.field(default=3, converter=as_int)
+    newton: int = eqx.field(default=10, converter=as_int)
+    rtol: float = eqx.field(default=1e-10, converter=as_float)
     label: ClassVar[str] = "coordinate search"
 
     def __check_init__(self):
         check_count("points", self.points, 5)
         check_count("sweeps", self.sweeps, 1)
+        check_count("newton", self.newton, 0)
+        check_number("rtol", self.rtol, strict=True)
 
     def search(self, problem: SearchProblem, start: np.ndarray, lower: np.ndarray,
                upper: np.ndarray) -> Searched:
         t0 = time.perf_counter()
-        u = np.clip(np.asarray(start, dtype=float), lower, upper)
+        u = on_bounds(np.asarray(start, dtype=float), lower, upper)
         k, G = u.size, self.points
         best = float(losses(problem, u[None])[0])
         evaluations = 1
         centre, half = (lower + upper) / 2, (upper - lower) / 2
+        flat = np.zeros(k, dtype=bool)
         for sweep in range(self.sweeps):
-            grid = np.clip(centre[:, None] + half[:, None] * np.linspace(-1, 1, G),
-                           lower[:, None], upper[:, None])  # (k, G)
+            tol = self.rtol * abs(best)
+            grid = on_bounds(centre[:, None] + half[:, None] * np.linspace(-1, 1, G),
+                             lower[:, None], upper[:, None])  # (k, G)
             trials = np.repeat(u[None], k * G, 0)
             trials[np.arange(k * G), np.repeat(np.arange(k), G)] = grid.reshape(-1)
-            f = losses(problem, trials).reshape(k, G)
+            f = np.array(losses(problem, trials)).reshape(k, G)
             evaluations += k * G
-            at = np.argmin(f, axis=1)
-            better = f[np.arange(k), at] < best
+            if sweep == 0:  # the grid spans the box: a coordinate it does not feel stays
+                flat = f.max(axis=1) - f.min(axis=1) <= tol
+            f[flat] = best
+            lowest = f.min(axis=1)
+            at = np.argmax(f <= lowest[:, None] + tol, axis=1)  # the first within tol
+            better = lowest < best - tol
             moved = u.copy()
             moved[better] = grid[better, at[better]]
             candidates = [moved]  # the moves together; in the last sweep, refined too
             if sweep == self.sweeps - 1:
-                candidates.append(_parabola(moved, grid, f, at, better, lower, upper))
+                candidates.append(_parabola(moved, grid, f, at, lower, upper, tol))
             tried = losses(problem, np.stack(candidates))
             evaluations += len(candidates)
             together = float(tried.min())
-            single = int(np.argmin(f.min(axis=1)))
-            if together < best and together <= f[single].min():
-                u, best = candidates[int(np.argmin(tried))], together
-            elif f[single].min() < best:
+            single = int(np.argmax(lowest <= lowest.min() + tol))
+            if together < best - tol and together <= lowest[single] + tol:
+                u, best = candidates[int(np.argmax(tried <= together + tol))], together
+            elif lowest[single] < best - tol:
                 u = u.copy()
-                u[single] = grid[single, np.argmin(f[single])]
-                best = float(f[single].min())
+                u[single] = grid[single, at[single]]
+                best = float(lowest[single])
             centre, half = u, half * 2 / (G - 1)
-        return Searched(u, best, evaluations, time.perf_counter() - t0)
+        extra: dict = {"held": flat}
+        if self.newton:
+            p = polish(problem, u, best, lower, upper, self.rtol, self.newton, k * G, flat)
+            u, best, evaluations = p.u, p.loss, evaluations + p.evaluations
+            extra.update(newton_steps=p.steps, converged=p.converged)
+        return Searched(u, best, evaluations, time.perf_counter() - t0, **extra)
 
 
-def _parabola(u, grid, f, at, better, lower, upper):
-    """``u`` with each coordinate whose best grid value is inside its grid (the current
-    value too) moved to the vertex of the parabola through that value and its two
-    neighbours."""
+class Held(AbstractSearch):
+    """No search: the parameters stay at the model's values. A fitted model carries the
+    values its search found with this method (:attr:`~sedsabso_jax.Identification.model`),
+    so that fitting it again fits the linear values of the same model;
+    ``dataclasses.replace(model, search=None)`` searches again from them."""
+
+    label: ClassVar[str] = "held at the values given"
+    searches: ClassVar[bool] = False
+
+    def search(self, problem: SearchProblem, start: np.ndarray, lower: np.ndarray,
+               upper: np.ndarray) -> Searched:
+        return Searched(np.clip(np.asarray(start, dtype=float), lower, upper), float("nan"),
+                        0, 0.0)
+
+
+#: The search method of a fitted model (:class:`Held`).
+HELD = Held()
+
+
+def _parabola(u, grid, f, at, lower, upper, tol):
+    """``u`` with each coordinate whose best grid value is inside its grid moved to the
+    vertex of the parabola through that value and its two neighbours, where they are
+    apart and their losses differ by more than ``tol`` (else the vertex is the
+    rounding's)."""
     out = u.copy()
     for j in np.flatnonzero((at > 0) & (at < grid.shape[1] - 1)):
         x, y = grid[j, at[j] - 1:at[j] + 2], f[j, at[j] - 1:at[j] + 2]
-        if not np.all(np.diff(x) > 0):  # points clipped onto a bound
+        if not np.all(np.diff(x) > 0) or np.ptp(y) <= tol:  # on a bound, or flat
             continue
         d1, d2 = (y[1] - y[0]) / (x[1] - x[0]), (y[2] - y[1]) / (x[2] - x[1])
         curvature = (d2 - d1) / (x[2] - x[0])

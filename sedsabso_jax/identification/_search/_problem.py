@@ -38,6 +38,14 @@ def losses(problem: SearchProblem, U: Float[np.ndarray, "p k"]) -> Float[np.ndar
     return np.asarray(_population(np.asarray(U, dtype=float), problem))
 
 
+def on_bounds(u: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """``u`` in the box, a value within 1e-9 of the box's width of a bound on it (a grid
+    point meant to be on a bound can land an ulp inside, and its trial then differs from
+    the bound's in the loss's last bits only)."""
+    near = 1e-9 * (upper - lower)
+    return np.where(u <= lower + near, lower, np.where(u >= upper - near, upper, u))
+
+
 def fitness(u, problem):
     """The problem's loss as a fitness ``f(u, args)`` whose ``args`` is the problem, for
     :func:`~sedsabso_jax.minimise`."""
@@ -47,9 +55,15 @@ def fitness(u, problem):
 @dataclasses.dataclass(frozen=True, eq=False)
 class Searched:
     """What a search returns: the best ``u`` found, its ``loss``, the ``evaluations``
-    made (a Jacobian counted as ``k + 1``) and the seconds it took."""
+    made (a Jacobian counted as ``k + 1``) and the seconds it took; a search that ends
+    with Newton's method (:func:`~._newton.polish`) also says its ``newton_steps``,
+    whether it ``converged``, and which parameters it ``held`` because the loss does not
+    feel them (None: not said)."""
 
     u: np.ndarray
     loss: float
     evaluations: int
     seconds: float
+    newton_steps: int | None = None
+    converged: bool | None = None
+    held: np.ndarray | None = None
