@@ -139,8 +139,8 @@ def judge(ident: Identification, data: Measurements,
 def mean_predicted(judged: Sequence[HeldOut]) -> float | None:
     """The mean of the recordings' predicted errors (:attr:`Rests.predicted`), None
     unless each has one."""
-    predicted = [h.rests.predicted for h in judged]
-    return None if any(p is None for p in predicted) else float(np.mean(predicted))
+    predicted = [p for h in judged if (p := h.rests.predicted) is not None]
+    return float(np.mean(predicted)) if len(predicted) == len(judged) else None
 
 
 def held_out_document(judged: Sequence[HeldOut]) -> dict | None:
