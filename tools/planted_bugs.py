@@ -42,6 +42,7 @@ IDENTIFICATION = ["tests/test_identification.py"]
 SEARCH = ["tests/test_search_methods.py"]
 PAYLOAD = ["tests/test_payload.py"]
 RESTS = ["tests/test_rests.py"]
+HELD_OUT = ["tests/test_held_out.py"]
 
 #: (module, text, replacement, what the bug is, tests to run, reason if equivalent)
 BUGS = [
@@ -358,6 +359,35 @@ BUGS = [
     ("identification/_validation/_rests.py",
      "    peak = peak_speed(qd)", "    peak = peak_speed(qd_new)",
      "rests counted against the new motion's peak speed", RESTS, None),
+    ("identification/_metrics.py",
+     "np.mean(values, axis=0) if key in _PER_JOINT else float(np.mean(values))",
+     "np.average(values, axis=0, weights=[m.n_samples for m in metrics])",
+     "held-out recordings averaged by their samples, not alike", HELD_OUT, None),
+    ("identification/_default/_held_out.py",
+     "        beyond = extrapolation(data, held, joint_names=joints)",
+     "        held = named[0][1]\n        beyond = extrapolation(data, held, joint_names=joints)",
+     "every held-out recording judged as the first", HELD_OUT, None),
+    ("identification/_default/_held_out.py",
+     "        at_rest = rests(data, held,", "        at_rest = rests(data, named[0][1],",
+     "every held-out recording's error weighed to the first one's speeds", HELD_OUT, None),
+    ("identification/_default/_select_and_identify.py",
+     "    ident = identify(robot, recordings, estimator, model, limits=limits)",
+     "    ident = identify(robot, [*recordings, *held.values()], estimator, model, "
+     "limits=limits)", "the held-out recordings fitted too", HELD_OUT, None),
+    ("identification/_default/_held_out.py",
+     "labels = [f\"held_out[{k}]\" for k in range(len(held_out))]",
+     "labels = [f\"held_out[{k + 1}]\" for k in range(len(held_out))]",
+     "a bad held-out entry named by the wrong index", HELD_OUT, None),
+    ("identification/_default/_held_out.py", "_warn(name if len(named) > 1 else None,",
+     "_warn(None,", "several held-out recordings' warnings without their names", HELD_OUT,
+     None),
+    ("identification/_default/_held_out.py",
+     "    return float(np.mean(predicted)) if len(predicted) == len(judged) else None",
+     "    return float(predicted[0]) if len(predicted) == len(judged) else None",
+     "the mean prediction the first recording's", HELD_OUT, None),
+    ("cli/_identify.py", "        if any(os.path.realpath(path) == os.path.realpath(p)",
+     "        if any(path == p", "a held-out file given twice under another spelling",
+     HELD_OUT, None),
 ]
 
 

@@ -96,6 +96,15 @@ def _choice(args: argparse.Namespace, physical: bool | None, candidates: int) ->
                   args.offset_per_recording, names)
 
 
+def _validate_files(paths: list[str] | None) -> list[str]:
+    """``--validate``'s files, none given twice."""
+    paths = list(paths or [])
+    for k, path in enumerate(paths):
+        if any(os.path.realpath(path) == os.path.realpath(p) for p in paths[:k]):
+            raise ValueError(f"--validate: {path} is given twice: give each held-out file once")
+    return paths
+
+
 def run(args: argparse.Namespace) -> None:
     """The subcommand: check the flags, load, build the objects, one call, print, write."""
     from ..dynamics import _robots as robots
@@ -127,8 +136,9 @@ def run(args: argparse.Namespace) -> None:
     load = loading(args, robot.n_joints)
     transmission = transmission_of(args, robot.n_joints)
     data = load_all(args.data, load, args.motor_side, transmission)
-    held_out = (load_all([args.validate], load, args.motor_side, transmission)[0]
-                if args.validate else None)
+    validate = _validate_files(args.validate)
+    held_out = (dict(zip(validate, load_all(validate, load, args.motor_side, transmission)))
+                if validate else None)  # each named by its file as given
     data = recordings_of(robot, data)  # one rate and the robot's joints, or exit 2 now
     limits = joint_limits(args.robot, robot).torque_limits
     if limits is None and all(e.needs_limits for e in estimators):
@@ -144,7 +154,8 @@ def run(args: argparse.Namespace) -> None:
                                      progress=progress)
     paths = [os.path.abspath(p) for p in args.data]
     settings = {"robot": args.robot, "data": paths[0] if len(paths) == 1 else paths,
-                "validate": None if args.validate is None else os.path.abspath(args.validate),
+                "validate": (None if not validate else os.path.abspath(validate[0])
+                             if len(validate) == 1 else [os.path.abspath(p) for p in validate]),
                 "torque_limits": limits, "loading": {**load, "data_info": report.data.info},
                 "motor_side": bool(args.motor_side)}
     with urdf_source(args.robot) as source:
@@ -172,6 +183,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--no-physical. Flags may also come from a --config file; the command line wins.",
         examples=["sedsabso-jax identify --robot kuka_lwr4 --data run1.npz --validate "
                   "run2.npz",
+                  "sedsabso-jax identify --robot kuka_lwr4 --data run1.npz --validate "
+                  "pick.npz fast.npz",
                   "sedsabso-jax identify --config identify.toml --physical --out results"])
     inp = ip.add_argument_group("input", "the robot, its data, and how the data are loaded")
     add_robot(inp)
@@ -214,8 +227,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     est.add_argument("--seed", metavar="N", type=non_negative_int, default=0,
                      help="random seed (0)")
     val = ip.add_argument_group("validation")
-    val.add_argument("--validate", metavar="FILE", default=None,
-                     help="held-out data (.npz or .csv): judges the fit, never chooses it")
+    val.add_argument("--validate", metavar="FILE", default=None, nargs="+",
+                     help="held-out data (.npz or .csv), one file or several: each judges the "
+                     "fit alone, never fits or chooses it; the report gives each (by its "
+                     "file name) and their mean")
     val.add_argument("--validation", choices=("pooled", "speed", "phase", "recordings"),
                      default="pooled",
                      help="what chooses what is auto and predicts the error on new motions: "

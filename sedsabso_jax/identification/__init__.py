@@ -15,8 +15,9 @@ base ``AbstractSearch``, and the problem they search, ``Projection``), what writ
 estimator needs, the command line's friction text (``parse_friction``), the default
 candidates (``candidate_models``, ``estimator_candidates``) and the rules between
 ``select_and_identify``'s options (``Choice``), the validation's parts and results,
-Dahl's presliding state (``dahl_state``), and how far held-out data extrapolate
-(``extrapolation``). Builds on :mod:`sedsabso_jax.dynamics`, :mod:`sedsabso_jax.optim`
+Dahl's presliding state (``dahl_state``), how far held-out data extrapolate
+(``extrapolation``), each held-out recording of a report judged alone (``HeldOut``) and
+metrics averaged over recordings (``mean_metrics``). Builds on :mod:`sedsabso_jax.dynamics`, :mod:`sedsabso_jax.optim`
 and :mod:`sedsabso_jax.measurements`.
 
 The sub-packages answer one question each: ``_model`` (what torque a model predicts: its
@@ -33,6 +34,7 @@ from ._default._choice import Choice as Choice
 from ._default._choice import DefaultValidation as DefaultValidation
 from ._default._choice import Names as Names
 from ._default._choice import estimator_candidates as estimator_candidates
+from ._default._held_out import HeldOut as HeldOut
 from ._default._report import figure_torques as figure_torques
 from ._estimators._box_search import FACE_TOLERANCE as FACE_TOLERANCE
 from ._estimators._estimator import EstimatorFit as EstimatorFit
@@ -49,6 +51,7 @@ from ._gains._solvers import LikelihoodGains as LikelihoodGains
 from ._gains._solvers import OrdinaryGains as OrdinaryGains
 from ._gains._solvers import PhysicalGains as PhysicalGains
 from ._gains._solvers import TotalGains as TotalGains
+from ._metrics import mean_metrics as mean_metrics
 from ._metrics import nrms_over_limits as nrms_over_limits
 from ._model._candidates import FRICTION_CANDIDATES as FRICTION_CANDIDATES
 from ._model._candidates import candidate_models as candidate_models
@@ -96,5 +99,5 @@ __all__ = [
     "PAYLOAD_PARAMETERS", "Projection", "AbstractSearch", "CoordinateSearch", "Held",
     "PopulationSearch", "LeastSquaresSearch", "dahl_state", "increments", "GAIN_METHODS",
     "AbstractGainMethod", "LikelihoodGains", "TotalGains", "OrdinaryGains", "PhysicalGains",
-    "CALIBRATED_STD", "KeptTerms", "KEPT_TERMS", "rests", "Rests",
+    "CALIBRATED_STD", "KeptTerms", "KEPT_TERMS", "rests", "Rests", "HeldOut", "mean_metrics",
 ]

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
-from .._output import jsonable
+from .._output import columns_note, jsonable, markdown_table
 
 _PER_JOINT = ("rms", "relative_rms_percent", "nrms_range_percent",
               "nrms_limits_percent_per_joint")
@@ -169,3 +169,56 @@ def validation_metrics(tau_measured: Float[ArrayLike, "T ..."],
         n_samples=int(T),
         n_joints=int(n),
     )
+
+
+def mean_metrics(metrics: Sequence[Metrics]) -> Metrics:
+    """Each figure of ``metrics`` (several recordings' :class:`Metrics`, of one robot)
+    averaged over them, each recording weighed alike whatever its length; ``n_samples``
+    their total. The NRMS over the limits is None unless every one has it."""
+    if not metrics or len({m.n_joints for m in metrics}) != 1:
+        raise ValueError(f"mean_metrics needs metrics of one joint count, got "
+                         f"{[m.n_joints for m in metrics]}")
+
+    def mean(key: str) -> Any:
+        values = [getattr(m, key) for m in metrics]
+        if any(v is None for v in values):
+            return None
+        return np.mean(values, axis=0) if key in _PER_JOINT else float(np.mean(values))
+
+    return Metrics(**{key: mean(key) for key in Metrics.__dataclass_fields__
+                      if key not in ("n_samples", "n_joints")},
+                   n_samples=sum(m.n_samples for m in metrics), n_joints=metrics[0].n_joints)
+
+
+#: The note under the report's first metrics table (the module docstring defines the
+#: figures).
+METRICS_NOTE = columns_note(
+    ("joint", "one row per joint, `overall` for all joints together"),
+    ("RMS error [N m]", "root mean square over the samples of measured - predicted torque "
+     "(N on a prismatic joint)"),
+    ("relative RMS [%]", "100 RMS error / RMS of the measured torque (overall: 100 norm(e) / "
+     "norm(tau), Frobenius norms)"),
+    ("NRMS range [%]", "100 RMS error / (max - min of the measured torque), overall the "
+     "mean over the joints"),
+    ("NRMS limits [%]", "100 RMS error / (2 torque limit), the error against the whole "
+     "range [-limit, limit], overall the mean over the joints (FloBaRoID's figure), `-` "
+     "without limits"))
+#: The note under a later metrics table.
+SAME_COLUMNS = "Columns as in the fit table above."
+
+
+def metrics_table(metrics: Metrics, joint_names: Sequence[str]) -> str:
+    """Markdown table of ``metrics``: one row per joint and one for the overall figures
+    (the numbers of :meth:`~sedsabso_jax.Metrics.table`; columns in :data:`METRICS_NOTE`)."""
+    limits = metrics.nrms_limits_percent_per_joint
+    rows = [[name, f"{metrics.rms[j]:.4g}", f"{metrics.relative_rms_percent[j]:.3f}",
+             f"{metrics.nrms_range_percent[j]:.3f}",
+             "-" if limits is None else f"{limits[j]:.4f}"]
+            for j, name in enumerate(joint_names)]
+    rows.append(["overall", f"{metrics.rms_overall:.4g}",
+                 f"{metrics.relative_rms_percent_overall:.3f}",
+                 f"{metrics.nrms_range_percent_mean:.3f}",
+                 "-" if metrics.nrms_limits_percent is None
+                 else f"{metrics.nrms_limits_percent:.4f}"])
+    return markdown_table(["joint", "RMS error [N m]", "relative RMS [%]", "NRMS range [%]",
+                           "NRMS limits [%]"], rows, align=["left"] + ["right"] * 4)

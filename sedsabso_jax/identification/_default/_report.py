@@ -25,11 +25,26 @@ from ...measurements._container import Measurements
 from .._estimators._estimator import Limits
 from .._fit._identify import Identification
 from .._fit._uncertainty import relative_std_percent
-from .._metrics import Metrics, validation_metrics
+from .._metrics import (
+    METRICS_NOTE,
+    SAME_COLUMNS,
+    Metrics,
+    mean_metrics,
+    metrics_table,
+    validation_metrics,
+)
 from .._recordings import joined, stacked
-from .._validation._extrapolation import Extrapolation, extrapolation
-from .._validation._rests import Rests, rests
+from .._validation._extrapolation import Extrapolation
+from .._validation._rests import Rests
 from .._validation._selection import CrossValidation, PriorSelection, Selection
+from ._held_out import (
+    HeldOut,
+    HeldOutData,
+    held_out_document,
+    held_out_lines,
+    judge,
+    named_recordings,
+)
 from ._stages import stage_lines
 
 if TYPE_CHECKING:
@@ -82,39 +97,6 @@ def model_units(names: Sequence[str]) -> str:
     return MODEL_UNITS + "".join(f"; {unit}" for unit in more)
 
 
-#: The note under the first metrics table (:mod:`._metrics` defines the figures).
-METRICS_NOTE = columns_note(
-    ("joint", "one row per joint, `overall` for all joints together"),
-    ("RMS error [N m]", "root mean square over the samples of measured - predicted torque "
-     "(N on a prismatic joint)"),
-    ("relative RMS [%]", "100 RMS error / RMS of the measured torque (overall: 100 norm(e) / "
-     "norm(tau), Frobenius norms)"),
-    ("NRMS range [%]", "100 RMS error / (max - min of the measured torque), overall the "
-     "mean over the joints"),
-    ("NRMS limits [%]", "100 RMS error / (2 torque limit), the error against the whole "
-     "range [-limit, limit], overall the mean over the joints (FloBaRoID's figure), `-` "
-     "without limits"))
-#: The note under a later metrics table.
-SAME_COLUMNS = "Columns as in the fit table above."
-
-
-def metrics_table(metrics: Metrics, joint_names: Sequence[str]) -> str:
-    """Markdown table of ``metrics``: one row per joint and one for the overall figures
-    (the numbers of :meth:`~sedsabso_jax.Metrics.table`; columns in :data:`METRICS_NOTE`)."""
-    limits = metrics.nrms_limits_percent_per_joint
-    rows = [[name, f"{metrics.rms[j]:.4g}", f"{metrics.relative_rms_percent[j]:.3f}",
-             f"{metrics.nrms_range_percent[j]:.3f}",
-             "-" if limits is None else f"{limits[j]:.4f}"]
-            for j, name in enumerate(joint_names)]
-    rows.append(["overall", f"{metrics.rms_overall:.4g}",
-                 f"{metrics.relative_rms_percent_overall:.3f}",
-                 f"{metrics.nrms_range_percent_mean:.3f}",
-                 "-" if metrics.nrms_limits_percent is None
-                 else f"{metrics.nrms_limits_percent:.4f}"])
-    return markdown_table(["joint", "RMS error [N m]", "relative RMS [%]", "NRMS range [%]",
-                           "NRMS limits [%]"], rows, align=["left"] + ["right"] * 4)
-
-
 def _cv_error(cv: CrossValidation) -> str:
     measure = cv.measure
     what = ("NRMS over the torque limits" if measure == "nrms_limits_percent"
@@ -149,7 +131,13 @@ class IdentificationReport:
 
     ``data`` and ``held_out`` are :class:`~sedsabso_jax.Measurements`; ``fit`` and
     ``validation`` their :class:`~sedsabso_jax.Metrics` (``validation`` None without
-    held-out data); ``predicted`` the predicted torques of each; ``cross_validation`` the
+    held-out data); ``predicted`` the predicted torques of each; ``validations`` each
+    held-out recording judged alone (:class:`~sedsabso_jax.identification.HeldOut`, in
+    the order given).
+    With several held-out recordings, ``held_out``, ``extrapolation``, ``rests`` and
+    ``predicted[1]`` are None (each recording's are in ``validations``) and
+    ``validation`` is their mean (:func:`~sedsabso_jax.identification.mean_metrics`:
+    each figure averaged, each recording weighed alike); ``cross_validation`` the
     chosen setting's :class:`~sedsabso_jax.identification.CrossValidation` on ``data``
     and ``selection`` the :class:`~sedsabso_jax.identification.Selection` it came from,
     ``prior_selection`` the :class:`~sedsabso_jax.identification.PriorSelection` of a
@@ -172,38 +160,38 @@ class IdentificationReport:
     #: how much more ``held_out`` rests than ``data``, and the validated error weighed
     #: to its speeds (:func:`~.._validation._rests.rests`)
     rests: Rests | None = None
+    #: each held-out recording judged alone, in the order given
+    validations: tuple[HeldOut, ...] = ()
 
     @classmethod
     def evaluate(cls, ident: Identification, data: Measurements | Sequence[Measurements],
-                 held_out: Measurements | None = None, limits: Limits = None, *,
+                 held_out: HeldOutData | None = None, limits: Limits = None, *,
                  cross_validation: CrossValidation | None = None,
                  selection: Selection | None = None,
                  prior_selection: PriorSelection | None = None) -> IdentificationReport:
         """Predict the torques of ``data`` (one recording or several; their own torque
-        offsets where the model has one per recording) and of ``held_out``, and compare;
-        with ``held_out``, measure how far it goes beyond ``data``
-        (:func:`~sedsabso_jax.identification.extrapolation`) and warn when a joint is beyond the
-        thresholds, and how much more it rests (:func:`~sedsabso_jax.identification.rests`:
-        the validated error weighed to its speeds, a warning where it rests more)."""
+        offsets where the model has one per recording) and of each held-out recording
+        (``held_out``: one, a list or tuple, or a mapping name -> recording), and
+        compare; for each, measure how far it goes beyond ``data``
+        (:func:`~sedsabso_jax.identification.extrapolation`) and warn when a joint is
+        beyond the thresholds, and how much more it rests
+        (:func:`~sedsabso_jax.identification.rests`: the validated error weighed to its
+        speeds, a warning where it rests more)."""
         recordings = [data] if isinstance(data, Measurements) else list(data)
         data = joined(recordings)
-        beyond = None if held_out is None else extrapolation(
-            data, held_out, joint_names=ident.model.robot.joint_names, warn=True)
-        at_rest = None if held_out is None else rests(
-            data, held_out, cross_validation=cross_validation if cross_validation is not None
-            and cross_validation.residuals is not None else None,
-            limits=None if limits is None else np.asarray(limits, dtype=float),
-            joint_names=ident.model.robot.joint_names, warn=True)
+        judged = judge(ident, data, named_recordings(ident.model.robot, held_out), limits,
+                       cross_validation)
         index = stacked(recordings)[-1] if len(recordings) > 1 else None
         fit_pred = ident.model.predict(ident.values, data.q, data.qd, data.qdd, index)
-        val_pred = None if held_out is None else ident.predict(held_out.q, held_out.qd,
-                                                              held_out.qdd)
-        return cls(ident, data, held_out, limits,
-                   validation_metrics(data.tau, fit_pred, limits),
-                   None if held_out is None else validation_metrics(
-                       held_out.tau, val_pred, limits),  # type: ignore[arg-type]
-                   (fit_pred, val_pred), cross_validation, selection, prior_selection,
-                   beyond, at_rest)
+        fit = validation_metrics(data.tau, fit_pred, limits)
+        if len(judged) != 1:  # none, or several: each in judged, their mean the validation
+            mean = mean_metrics([h.metrics for h in judged]) if judged else None
+            return cls(ident, data, None, limits, fit, mean, (fit_pred, None),
+                       cross_validation, selection, prior_selection, validations=judged)
+        one, = judged
+        return cls(ident, data, one.data, limits, fit, one.metrics, (fit_pred, one.predicted),
+                   cross_validation, selection, prior_selection, one.extrapolation, one.rests,
+                   judged)
 
     def text(self) -> str:
         """The parameters and per-joint metrics as markdown tables, each with a note that
@@ -281,27 +269,7 @@ class IdentificationReport:
                           ("CV error [%]", _cv_error(self.prior_selection.cross_validation)),
                           ("choice", "`chosen` (the strongest pull within one standard error "
                            "of the lowest) or `lowest` (the lowest CV error)"))]
-        if self.validation is not None and self.held_out is not None:
-            lines += ["", f"validation ({self.held_out.source}, {self.held_out.n_samples} "
-                          f"samples):", "", metrics_table(self.validation, joints), "",
-                      SAME_COLUMNS]
-        if self.extrapolation is not None:
-            lines += ["", "extrapolation (how far the validation data go beyond the "
-                          "identification data, per joint):", "", self.extrapolation.table(),
-                      "", self.extrapolation.note()]
-            message = self.extrapolation.message()
-            if message is not None:
-                lines += ["", f"warning: {message}"]
-        if self.rests is not None:
-            lines += ["", "rests (the share of samples at rest and slow, per joint):", "",
-                      self.rests.table(), "", self.rests.note()]
-            if self.rests.predicted is not None:
-                lines += ["", f"predicted error on the validation data, the validated "
-                              f"error weighed to their speeds: {self.rests.predicted:.4f} % "
-                              f"({self.rests.factor:.2f} x the validated error)"]
-            message = self.rests.message()
-            if message is not None:
-                lines += ["", f"warning: {message}"]
+        lines += held_out_lines(self.validations, joints)
         if self.limits is None:
             lines += ["", "NRMS over torque limits: no limits known for this robot"]
         return "\n".join(lines)
@@ -325,17 +293,20 @@ class IdentificationReport:
             "extrapolation": None if self.extrapolation is None
             else self.extrapolation.as_dict(),
             "rests": None if self.rests is None else self.rests.as_dict(),
+            "validations": held_out_document(self.validations),
         })
 
     def figures(self) -> dict:
-        """``{file name: figure}``: measured against predicted torques per data set."""
+        """``{file name: figure}``: measured against predicted torques per data set
+        (``torques_validation.png`` for one held-out recording, ``torques_validation_K.png``
+        for the K-th of several)."""
         ident, robot = self.ident, self.ident.model.robot
         sets: list[tuple[str, Measurements, np.ndarray | None, str]] = [
             ("torques_fit.png", self.data, self.predicted[0], "identification data")]
-        if self.held_out is not None:
-            sets.append(("torques_validation.png", self.held_out, self.predicted[1],
-                         "held-out data"))
-        # pred is None only for held-out data, which is then not in sets
+        several = len(self.validations) > 1
+        sets += [(f"torques_validation{f'_{k}' * several}.png", h.data, h.predicted,
+                  f"held-out data{f': {h.name}' * several}")
+                 for k, h in enumerate(self.validations, 1)]
         method = ident.method + (", physically consistent" if ident.full_params is not None
                                  else "")
         return {name: figure_torques(d.times, d.tau, pred,  # type: ignore[arg-type]

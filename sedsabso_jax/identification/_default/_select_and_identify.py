@@ -3,6 +3,8 @@ validation, then (physically consistent fits) the pull to the prior, then fit, a
 judge the fit on held-out data::
 
     report = select_and_identify(robot, data, held_out=other_run, limits=limits)
+    # or several held-out runs, each judged alone: held_out=[run2, run3] or
+    # held_out={"pick and place": run2, "faster": run3}
     print(report.text())          # what `sedsabso-jax identify` prints
     report.write(settings, out_dir, json_path)
 
@@ -31,6 +33,7 @@ from .._validation._selection import (
 )
 from .._validation._splits import Validation
 from ._choice import Choice, DefaultValidation
+from ._held_out import HeldOutData, named_recordings
 from ._report import IdentificationReport
 
 
@@ -53,7 +56,7 @@ class _Stages:
         return step
 
 
-def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = None,
+def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | None = None,
                         limits: Limits = None,
                         models: TorqueModel | Iterable[TorqueModel] | None = None,
                         estimators: Estimator | Iterable[Estimator] | None = None,
@@ -87,21 +90,21 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
        :data:`~sedsabso_jax.identification.PRIOR_STRENGTHS` by the same validation,
        :func:`~sedsabso_jax.choose_prior_strength`), pulls a physically consistent fit
        toward the robot's a-priori parameters.
-    3. The fit on all of ``data``, judged on it, on the validation and on ``held_out``
-       (never used to choose or fit).
+    3. The fit on all of ``data``, judged on it, on the validation and on each held-out
+       recording alone (never used to choose or fit), and, for several, on their mean.
 
     ``data``: a :class:`~sedsabso_jax.Measurements`, several (recordings of one rate,
     fitted together; models with one torque offset per recording:
     ``candidate_models(robot, recordings=len(data))``), or ``(times, q, qd, qdd, tau)``;
-    ``held_out`` likewise (one recording); ``limits``: per-joint torque limits (the NRMS
-    measure and the 1/limit weighting; candidates weighting by them are skipped
-    without); ``progress(label, done, total)``: called after each fit, ``done`` running
+    ``held_out``: one recording (a Measurements or its arrays), a list or tuple of
+    Measurements, or a mapping name -> Measurements (each named in the report by its
+    key, else by its ``source``, a loaded file's path); ``limits``: per-joint torque
+    limits (the NRMS measure and the 1/limit weighting; candidates weighting by them are
+    skipped without); ``progress(label, done, total)``: called after each fit, ``done`` running
     1..``total`` over the whole call (None: quiet). The rules between the options are
     :class:`Choice`'s. Returns the :class:`~._report.IdentificationReport` the command
     prints (``text()``) and writes (``write(...)``)."""
-    held = None if held_out is None else recordings_of(robot, held_out)
-    if held is not None and len(held) > 1:
-        raise ValueError("held_out must be one recording")
+    held = dict(named_recordings(robot, held_out))  # checked before any work
     recordings = recordings_of(robot, data)
     models = candidate_models(robot) if models is None else tuple(
         model_of(robot, m) for m in one_or_more(models, TorqueModel))
@@ -138,7 +141,6 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
     ident = identify(robot, recordings, estimator, model, limits=limits)
     if progress is not None:
         progress("fit on all the data", stages.done + 1, stages.done + 1)
-    return IdentificationReport.evaluate(ident, recordings, None if held is None else held[0],
-                                         limits,
+    return IdentificationReport.evaluate(ident, recordings, held or None, limits,
                                          cross_validation=cv, selection=selection,
                                          prior_selection=prior_selection)
