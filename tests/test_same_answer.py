@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -157,3 +158,32 @@ def test_a_fitted_model_fits_again_without_a_search():
     np.testing.assert_array_equal(again.values, fit.values)
     assert again.settings["searched"]["evaluations"] == 0
     assert again.settings["searched"]["parameters"] == fit.settings["searched"]["parameters"]
+
+
+# ----------------------------------------------------------------- not determined
+def test_a_displacement_the_data_cannot_place_is_not_determined():
+    """A plant with friction at rest on joints 1 and 3 only: joint 2's displacement moves
+    no torque, its standard deviation exceeds the search box, and the report says `not
+    determined` with no standard deviation; the others are determined and within 10 %."""
+    from test_friction_state import dahl_loop, point_to_point
+
+    robot = sj.robots.rs010n()
+    qf, qdf, qddf, dt = point_to_point(3)
+    q_c, fp = np.array([0.01, 0.02, 0.04]), np.array([3.0, 0.0, 1.0])
+    q, qd, qdd = qf[::10], qdf[::10], qddf[::10]
+    t = np.arange(len(q)) * dt * 10
+    tau = sj.simulate_measurements(robot, q, qd, qdd, t).tau + fp * dahl_loop(qf, q_c)[::10]
+    tau = tau + 0.01 * np.sqrt(np.mean(tau ** 2, 0)) * np.random.default_rng(1).standard_normal(
+        tau.shape)
+    model = sj.TorqueModel.of(robot, (sj.Presliding(fitted=True),))
+    fit = sj.identify(robot, sj.Measurements(t, q, qd, qdd, tau), sj.OLS(), model)
+    found = fit.settings["searched"]["parameters"]
+    assert [found[f"q_c{j}"]["determined"] for j in (1, 2, 3)] == [True, False, True]
+    assert found["q_c2"]["std"] is None
+    np.testing.assert_allclose([found["q_c1"]["value"], found["q_c3"]["value"]], q_c[[0, 2]],
+                               rtol=0.1)
+    from sedsabso_jax.identification._default._stages import stage_lines
+
+    line = stage_lines(fit.settings)[1]
+    assert re.search(r"q_c2 = [0-9.e-]+ rad \(not determined\)", line), line
+    assert re.search(r"q_c1 = [0-9.e-]+ \+- [0-9.e-]+ rad,", line), line

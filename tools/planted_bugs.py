@@ -43,6 +43,7 @@ SEARCH = ["tests/test_search_methods.py"]
 PAYLOAD = ["tests/test_payload.py"]
 RESTS = ["tests/test_rests.py"]
 HELD_OUT = ["tests/test_held_out.py"]
+SAME = ["tests/test_same_answer.py"]
 
 #: (module, text, replacement, what the bug is, tests to run, reason if equivalent)
 BUGS = [
@@ -388,6 +389,33 @@ BUGS = [
     ("cli/_identify.py", "        if any(os.path.realpath(path) == os.path.realpath(p)",
      "        if any(path == p", "a held-out file given twice under another spelling",
      HELD_OUT, None),
+    ("identification/_search/_methods.py",
+     "            at = np.argmax(f <= lowest[:, None] + tol, axis=1)  # the first within tol",
+     "            at = np.argmin(f, axis=1)",
+     "a grid's ties broken by the loss's last bits", SAME, None),
+    ("identification/_search/_methods.py", "            better = lowest < best - tol",
+     "            better = lowest < best", "a move kept for a gain within the rounding",
+     SAME, None),
+    ("identification/_search/_methods.py",
+     "    newton: int = eqx.field(default=10, converter=as_int)",
+     "    newton: int = eqx.field(default=0, converter=as_int)",
+     "the search stops at the grid (no Newton's method)", SAME, None),
+    ("identification/_search/_problem.py", "    near = 1e-9 * (upper - lower)",
+     "    near = 0.0 * (upper - lower)", "a grid point an ulp inside a bound is not on it",
+     SAME, None),
+    ("identification/_search/_newton.py", "        if -0.5 * float(g @ d) <= FTOL * scale:",
+     "        if -0.5 * float(g @ d) <= 0.0:", "Newton's method steps on the rounding",
+     SAME, None),
+    ("identification/_search/_newton.py", "        keep = np.abs(lam) > floor",
+     "        keep = np.abs(lam) > 0", "Newton's method steps along directions the rounding "
+     "makes", SAME, None),
+    ("identification/_fit/_fit.py",
+     "        model = dataclasses.replace(model, search=HELD)\n", "",
+     "a fitted model searched again when fitted again", SAME, None),
+    ("identification/_fit/_uncertainty.py",
+     "    determined = log_std <= np.log(upper / lower)",
+     "    determined = np.isfinite(log_std)",
+     "a displacement the data cannot place reported with a standard deviation", SAME, None),
 ]
 
 
