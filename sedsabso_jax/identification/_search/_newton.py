@@ -125,6 +125,8 @@ def polish(problem: SearchProblem, u: np.ndarray, loss: float, lower: np.ndarray
                             for c in range(chunks)])[:len(trials)]
         evaluations += chunks * size
         f0, g, H = quadratic(f, k, pairs, STEP)
+        if steps == 1:  # the size the loss's rounding is relative to: its trials'
+            scale = max(scale, float(np.abs(f).max()))
         at_bound = ((u <= lower) & (g > 0)) | ((u >= upper) & (g < 0))
         floor = 4 * FTOL * scale / STEP ** 2
         d = newton_step(g, H, ~(at_bound | held), u, lower, upper, floor)
