@@ -135,6 +135,10 @@ def test_an_excitation_that_determines_nothing_is_refused(tmp_path, capsys):
                                          r"condition number is 2\.2\de\+04"):
         sj.identify(robot, _sine(robot, 0.3, (1.0, 1.0, 1.0)))
     assert COND_WARN < 2.2e4 < COND_ERROR < 7e6
+    # a prior pulls what the data leave undetermined: a warning, the fit goes on
+    with pytest.warns(UserWarning, match=r"condition number is 7\.0"):
+        sj.identify(robot, _sine(robot, 0.05, (1.0, 1.0, 1.0)),
+                    sj.PhysicallyConsistent(sj.OLS(), prior_strength=1e-3))
 
 
 def test_positions_in_degrees(rs010n_run, tmp_path, capsys):

@@ -117,7 +117,9 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: Data | None = Non
     chosen_by = choice.validation_of(recordings)
     check_selection_data(robot, recordings, models, per_joint("limits", limits, robot.n_joints),
                          chosen_by, held_out=None if held is None else held[0],
-                         regularized=choice.physical is True and choice.prior_strength != 0)
+                         regularized=choice.physical is True  # "cv" may choose none
+                         and not isinstance(choice.prior_strength, str)
+                         and choice.prior_strength > 0)
     kept = (validation.kept if isinstance(validation, DefaultValidation)
             and len(models) > 1 else None)
     # the fits after the model choice, for the progress: the prior's validation, the fit
