@@ -143,7 +143,7 @@ def check_motion(robot: Robot, recordings: Sequence[Measurements], what: str = "
 def check_excitation(robot: Robot, recordings: Sequence[Measurements], base, *,
                      regularized: bool = False) -> None:
     """The condition number (unit-norm columns) of ``base``'s regressor (the robot's base
-    parameters, a :class:`~sedsabso_jax.dynamics.BaseParameters`) at the recordings: a
+    parameters, a :class:`~sedsabso_jax.BaseParameters`) at the recordings: a
     ValueError above :data:`COND_ERROR` (a warning when a prior pulls the fit,
     ``regularized``), a warning above :data:`COND_WARN`. Joints that never move are
     :func:`check_motion`'s to report (nothing here then)."""
@@ -206,7 +206,7 @@ def check_torques(robot: Robot, recordings: Sequence[Measurements], limits,
 
 def check_limits(robot: Robot, recordings: Sequence[Measurements], joint_limits,
                  what: str = "", torques: bool = True) -> None:
-    """Positions and speeds against a :class:`~sedsabso_jax.dynamics.JointLimits`:
+    """Positions and speeds against a :class:`~sedsabso_jax.JointLimits`:
     positions beyond a limit by more than the joint's range, or peak speeds beyond
     :data:`LIMIT_FACTOR` times the velocity limit, are a ValueError (degrees for
     radians). Then the torques (:func:`check_torques`) unless ``torques`` is False (they
