@@ -245,7 +245,7 @@ def test_a_validation_that_cannot_measure_an_error(rs010n_run, tmp_path, capsys)
     _refused(["identify", "--robot", "rs010n", "--data", path, *quick, "--validation",
               "phase", "--folds", "2", "--json", str(tmp_path / "r.json")], capsys,
              "the validation cannot measure an error: its split 'phase 1/2' fits",
-             "none (no predicted error)", written=[tmp_path / "r.json"])
+             "or none (--folds 0", written=[tmp_path / "r.json"])
 
 
 # ------------------------------------------------------------------ the user's words

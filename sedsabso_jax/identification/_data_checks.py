@@ -57,11 +57,13 @@ COND_ERROR = 1.0 / ILL_RTOL
 LIMIT_FACTOR = 10.0
 #: The quantile of ``|tau|`` (``|qd|``) called a joint's peak: one spike does not count.
 PEAK_QUANTILE = 0.995
-#: Positions beyond a joint's limits by more than its range (``q_max - q_min``) are an
-#: error: no zero offset does that (a URDF's limits are often the controller's, inside
-#: the stops, and simulated test motions leave the RS010N's table by 0.2 rad), while
-#: degrees for radians (57 x) do as soon as a joint passes (its limit + its range) / 57
-#: rad, 0.1 to 0.2 rad on the shipped robots, and millimetres for metres (1000 x).
+#: Positions beyond a joint's limits by more than this many times its range (``q_max -
+#: q_min``) are an error: no zero offset does that (a URDF's limits are often the
+#: controller's, inside the stops, and simulated test motions leave the RS010N's table by
+#: 0.2 rad), while degrees for radians (57 x) do as soon as a joint passes (its limit +
+#: its range) / 57 rad, 0.1 to 0.2 rad on the shipped robots, and millimetres for metres
+#: (1000 x).
+POSITION_RANGES = 1.0
 
 
 def joint_label(robot: Robot, j: int) -> str:
@@ -189,9 +191,10 @@ def check_torques(robot: Robot, recordings: Sequence[Measurements], limits,
 
     def where(k: int, j: int) -> str:
         d = recordings[k]
+        unit = "N m" if robot.joint_types[j] == "revolute" else "N"
         return (f"{_source(d, k, len(recordings))}: {joint_label(robot, j)}'s "
                 f"{_signal(d, 'torques', j)} reach {ratios[k][j] * limits[j]:.4g}, "
-                f"{ratios[k][j]:.3g} x its effort limit {limits[j]:.4g} N m")
+                f"{ratios[k][j]:.3g} x its effort limit {limits[j]:.4g} {unit}")
 
     for k, ratio in enumerate(ratios):  # errors first: one line, no warning before it
         for j in map(int, np.flatnonzero(ratio > LIMIT_FACTOR)):
@@ -220,7 +223,8 @@ def check_limits(robot: Robot, recordings: Sequence[Measurements], joint_limits,
         source = _source(d, k, len(recordings))
         below, above = lo - d.q.min(axis=0), d.q.max(axis=0) - hi
         excess = np.maximum(below, above)
-        for j in map(int, np.flatnonzero(np.isfinite(span) & (excess > span))):
+        for j in map(int, np.flatnonzero(np.isfinite(span)
+                                         & (excess > POSITION_RANGES * span))):
             unit = "rad" if robot.joint_types[j] == "revolute" else "m"
             value = d.q[:, j].min() if below[j] >= above[j] else d.q[:, j].max()
             raise ValueError(f"{source}: {joint_label(robot, j)}'s "
@@ -253,8 +257,8 @@ def check_splits(splits, n_joints: int, n_parameters: int) -> None:
                 f"the validation cannot measure an error: its split '{name}' fits "
                 f"{rows // n_joints} samples x {n_joints} joints = {rows} torque equations "
                 f"for {n_parameters} parameters, fewer than {MIN_SPLIT_ROWS_PER_PARAMETER} "
-                f"per parameter; record a longer motion, or choose another validation, or "
-                f"none (no predicted error)")
+                f"per parameter; record a longer motion, or choose another validation "
+                f"(--validation), or none (--folds 0, validation=None: no predicted error)")
 
 
 def check_distinct(unloaded: Sequence[Measurements], loaded: Sequence[Measurements],
