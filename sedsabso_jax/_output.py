@@ -40,7 +40,10 @@ def atomic_write(path: PathLike, write: Callable[[BinaryIO], None]) -> Path:
     if not directory.is_dir():
         raise FileNotFoundError(f"{path}: directory {directory} does not exist")
     mode = (path.stat().st_mode & 0o777) if path.is_file() else 0o644
-    fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{path.name}.", suffix=".tmp")
+    except OSError as err:
+        raise _named(err, path) from None
     try:
         with os.fdopen(fd, "wb") as f:
             write(f)
@@ -48,11 +51,22 @@ def atomic_write(path: PathLike, write: Callable[[BinaryIO], None]) -> Path:
             os.fsync(f.fileno())
         os.chmod(tmp, mode)
         os.replace(tmp, path)
+    except OSError as err:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise _named(err, path) from None
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
     return path
+
+
+def _named(err: OSError, path: Path) -> OSError:
+    """``err`` naming the target ``path``, not the temporary file beside it."""
+    if err.errno is None:
+        return err
+    return type(err)(err.errno, err.strerror, str(path))
 
 
 def write_text(path: PathLike, text: str) -> Path:

@@ -153,7 +153,7 @@ def test_a_joint_the_data_cannot_calibrate_is_reported(rs010n):
     t, q, qd, qdd = (a.copy() for a in motion)
     q[:, 0], qd[:, 0], qdd[:, 0] = 0.3, 0.0, 0.0
     runs = [_currents(robot, p, (t, q, qd, qdd), GAINS) for p in (robot.params, plant)]
-    with pytest.warns(UserWarning, match=r"do not calibrate joint 1 \(not determined\)"):
+    with pytest.warns(UserWarning, match=r"do not calibrate joint J1 \(not determined\)"):
         found = sj.identify_drive_gains(robot, *runs, "link3", MASS,
                                         model=sj.TorqueModel.of(robot, sj.Offset()))
     assert np.isnan(found.gains[0]) and np.isinf(found.std[0])
@@ -291,7 +291,7 @@ def test_identify_reads_the_gains_file(files, tmp_path, capsys):
     capsys.readouterr()
     for content, match in (({"drive_gains": GAINS.tolist(), "motor_side": True},
                             "give --motor-side"),
-                           ({"drive_gains": [None, 1.0, 1.0]}, "joints [1] were not "),
+                           ({"drive_gains": [None, 1.0, 1.0]}, "joints 1 were not "),
                            ({"gains": [1, 2, 3]}, "no 'drive_gains' list")):
         gains.write_text(json.dumps(content))
         assert _status([*argv, "--drive-gains", str(gains)]) == 2

@@ -575,7 +575,12 @@ def test_parse_friction_reads_the_command_lines_text(rs010n):
                         ("load:quadratic", r"^friction term 'load': expected load, "
                                            r"load:viscous, load:fixed-point or "
                                            r"load:viscous,fixed-point, got load:quadratic$"),
-                        ("smooth:-1", r"SmoothCoulomb's velocity must be a number > 0"),
+                        ("smooth:-1", r"^friction term 'smooth': expected smooth:fit or "
+                                      r"smooth:VELOCITY \(rad/s, .*each > 0\), got smooth:-1$"),
+                        ("presliding:fit:-1", r"^friction term 'presliding': presliding:fit:"
+                                              r"LARGEST .* a number in \(1e-05, 0\.5\], got "
+                                              r"presliding:fit:-1 \(e\.g\. presliding:fit:"
+                                              r"0\.02\)$"),
                         ("", "^friction must be a string of terms joined by '\\+'"),
                         (None, "^friction must be a string")]:
         with pytest.raises(ValueError, match=match):

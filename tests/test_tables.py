@@ -158,7 +158,8 @@ def test_identify_report(limits):
     traj = sj.FourierTrajectory(rng.uniform(-0.3, 0.3, (3, 3)), rng.uniform(-0.3, 0.3, (3, 3)),
                                 np.zeros(3), wf=0.6)
     data = sj.simulate_measurements_along(robot, traj, np.arange(120) / 40.0)
-    ident = sj.identify(robot, data, sj.OLS(), sj.TorqueModel.of(robot))
+    with pytest.warns(UserWarning, match="excite the robot's base parameters poorly"):
+        ident = sj.identify(robot, data, sj.OLS(), sj.TorqueModel.of(robot))  # 3 s
     cvs = [_cross_validation(rng, np.asarray(data.tau), limits, k) for k in (21, 24)]
     settings = [{"method": "OLS", "sigma": None, "friction": "viscous-coulomb"},
                 {"method": "WLS", "sigma": "residual", "friction": "viscous-coulomb+offset"}]

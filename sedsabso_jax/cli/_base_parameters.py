@@ -7,6 +7,7 @@ import os
 import sys
 from typing import TYPE_CHECKING, Any
 
+from ._checks import inputs_of, refuse_overwriting
 from ._common import BUILTIN_ROBOTS, add_run_options, check_writable, subcommand
 
 if TYPE_CHECKING:
@@ -58,6 +59,7 @@ def run(args: argparse.Namespace) -> None:
     to_stdout = args.json == "-"
     if args.json is not None and not to_stdout:
         check_writable(None, args.json)
+        refuse_overwriting({"--json": args.json}, inputs_of(args))
     robot = robots.load(args.robot, args.tip)
     paper_columns = args.robot == "rs010n"
     if args.json is None or not to_stdout:

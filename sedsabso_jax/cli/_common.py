@@ -125,7 +125,11 @@ non_negative_float = number(float, 0, strict=False)
 
 def check_writable(out_dir: PathLike | None, json_path: PathLike | None,
                    urdf_path: PathLike | None = None) -> None:
-    """Fail before the (long) run, not after it, when an output cannot be written."""
+    """Fail before the (long) run, not after it, when an output cannot be written: a file
+    is made and removed where each output goes (its nearest existing directory), as
+    permissions alone do not tell (root's, a read-only or virtual file system's)."""
+    import tempfile
+
     for flag, path in (("--out", out_dir), ("--json", json_path), ("--urdf-out", urdf_path)):
         if path is None:
             continue
@@ -135,8 +139,13 @@ def check_writable(out_dir: PathLike | None, json_path: PathLike | None,
             existing = os.path.dirname(existing)
         if not os.path.isdir(existing):
             raise ValueError(f"{flag} {path!r}: {existing!r} exists and is not a directory")
-        if not os.access(existing, os.W_OK):
-            raise ValueError(f"{flag} {path!r}: directory {existing!r} is not writable")
+        try:
+            fd, probe = tempfile.mkstemp(dir=existing, prefix=".sedsabso-jax-check.")
+            os.close(fd)
+            os.unlink(probe)
+        except OSError as err:
+            raise ValueError(f"{flag} {path!r}: cannot write in directory {existing!r} "
+                             f"({err.strerror or err})") from None
     for flag, path in (("--json", json_path), ("--urdf-out", urdf_path)):
         if path is not None and os.path.isdir(path):
             raise ValueError(f"{flag} {path!r} is a directory; expected a file path")

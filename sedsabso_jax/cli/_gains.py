@@ -9,6 +9,7 @@ import argparse
 import os
 
 from . import _loading as files
+from ._checks import check_signals, inputs_of, one_rate, refuse_overwriting
 from ._common import add_run_options, check_writable, positive_float, subcommand
 
 #: The torque model unless --friction says otherwise: friction that grows with the load
@@ -50,6 +51,7 @@ def run(args: argparse.Namespace) -> None:
     from ..identification._model._torque_model import TorqueModel
 
     check_writable(None, args.json)
+    refuse_overwriting({"--json": args.json}, inputs_of(args, "--data", "--loaded"))
     if args.drive_gains is not None:
         raise ValueError("--drive-gains: identify-gains finds the drive gains; its --data "
                          "and --loaded hold the recorded currents as they are")
@@ -60,6 +62,8 @@ def run(args: argparse.Namespace) -> None:
     transmission = files.transmission_of(args, robot.n_joints)
     unloaded = _currents(args.data, load, transmission)
     loaded = _currents(args.loaded, load, transmission)
+    one_rate([("--data", unloaded), ("--loaded", loaded)])
+    check_signals(args.robot, robot, [unloaded, loaded], torques=False)  # currents
     count = len(unloaded) + len(loaded) if args.offset_per_recording else 1
     model = TorqueModel.of(robot, terms, transmission=transmission, recordings=count)
     with files.urdf_source(args.robot) as urdf:

@@ -18,6 +18,13 @@ from ._common import (
     positive_int,
     subcommand,
 )
+from ._checks import (
+    check_signals,
+    inputs_of,
+    one_rate,
+    refuse_contradictions,
+    refuse_overwriting,
+)
 from ._loading import (
     add_loading,
     add_motors,
@@ -116,6 +123,9 @@ def run(args: argparse.Namespace) -> None:
     from ..identification._recordings import recordings_of
 
     check_writable(args.out, args.json, args.urdf_out)
+    refuse_contradictions(args)
+    refuse_overwriting({"--json": args.json, "--urdf-out": args.urdf_out},
+                       inputs_of(args, "--data", "--validate"))
     if args.urdf_out is not None and args.physical is False:
         raise ValueError("--urdf-out needs physically consistent link parameters, which "
                          "--no-physical rules out")
@@ -139,7 +149,10 @@ def run(args: argparse.Namespace) -> None:
     validate = _validate_files(args.validate)
     held_out = (dict(zip(validate, load_all(validate, load, args.motor_side, transmission)))
                 if validate else None)  # each named by its file as given
+    one_rate([("--data", data)])
     data = recordings_of(robot, data)  # one rate and the robot's joints, or exit 2 now
+    # degrees for radians, torques in another unit, ...
+    check_signals(args.robot, robot, [data, list((held_out or {}).values())])
     limits = joint_limits(args.robot, robot).torque_limits
     if limits is None and all(e.needs_limits for e in estimators):
         raise ValueError(f"--weights limits: no torque limits known for --robot {args.robot} "

@@ -35,9 +35,13 @@ def drive_gains(args: argparse.Namespace, n: int) -> list[float] | None:
     --json`` wrote (its ``drive_gains``, recorded on the side ``--motor-side`` says)."""
     import json
 
+    from ..identification._data_checks import check_gains
+
     text = args.drive_gains
-    if text is None or not (text.lower().endswith(".json") or os.path.isfile(text)):
-        return numbers("--drive-gains", text, n)
+    if text is None:
+        return None
+    if not (text.lower().endswith(".json") or os.path.isfile(text)):
+        return check_gains(numbers("--drive-gains", text, n), n, "--drive-gains").tolist()
     from ..identification._gains._result import read_gains
 
     try:
@@ -47,7 +51,8 @@ def drive_gains(args: argparse.Namespace, n: int) -> list[float] | None:
         raise FileNotFoundError(f"--drive-gains {text}: no such file") from None
     except (OSError, ValueError) as err:
         raise ValueError(f"--drive-gains {text}: not a JSON file ({err})") from None
-    gains = read_gains(doc, n, f"--drive-gains {text}")
+    gains = check_gains(read_gains(doc, n, f"--drive-gains {text}"), n,
+                        f"--drive-gains {text}")
     side = bool(doc.get("motor_side", False))
     if side != bool(args.motor_side):
         raise ValueError(f"--drive-gains {text}: the gains are the "

@@ -8,6 +8,7 @@ import argparse
 import os
 
 from . import _loading as files
+from ._checks import check_signals, inputs_of, one_rate, refuse_overwriting
 from ._common import add_run_options, check_writable, subcommand
 
 #: The torque model of the joint fit unless --friction says otherwise.
@@ -24,6 +25,7 @@ def run(args: argparse.Namespace) -> None:
     from ..identification._payload._identify_payload import identify_payload
 
     check_writable(None, args.json)
+    refuse_overwriting({"--json": args.json}, inputs_of(args, "--data", "--loaded"))
     terms = parse_friction(args.friction)
     if not args.data and (args.friction != DEFAULT_FRICTION or args.offset_per_recording):
         raise ValueError("--friction and --offset-per-recording shape the joint fit with the "
@@ -33,6 +35,8 @@ def run(args: argparse.Namespace) -> None:
     transmission = files.transmission_of(args, robot.n_joints)
     loaded = files.load_all(args.loaded, load, args.motor_side, transmission)
     unloaded = files.load_all(args.data or [], load, args.motor_side, transmission)
+    one_rate([("--data", unloaded), ("--loaded", loaded)])
+    check_signals(args.robot, robot, [unloaded, loaded])
     model = None
     if unloaded:
         count = len(loaded) + len(unloaded) if args.offset_per_recording else 1

@@ -7,14 +7,18 @@ Read by :func:`~sedsabso_jax.load_measurements`, written by
   ``times (T,)``, ``positions, torques (T, n)``, optional ``velocities, accelerations
   (T, n)``. Other keys (FloBaRoID's ``target_positions`` ...) are ignored. Read with
   ``allow_pickle=False``: an archive holding Python objects is refused, never unpickled.
-- ``.csv``: one header line, then one line per sample, comma separated. Columns
+- ``.csv``: one header line, then one line per sample, separated by commas (or by
+  semicolons or tabs, as the header is, with decimal points or commas). Columns
   ``time, q1..qn, qd1..qdn, qdd1..qddn, tau1..taun`` (1-based joint numbers; ``qd`` and
   ``qdd`` optional, column order free). Also accepted, case-insensitive, with or without
   ``_`` before the number: ``times``/``t``; ``pos``/``position``/``positions``;
   ``dq``/``qdot``/``vel``/``velocity``/``velocities``; ``ddq``/``qddot``/``acc``/
   ``acceleration``/``accelerations``; ``torque``/``torques``/``effort``. Other columns
-  are ignored (listed in ``info["ignored_columns"]``). A ``#`` before the header is
-  allowed; later lines starting with ``#`` are comments.
+  are ignored (listed in ``info["ignored_columns"]``). A unit may follow a name in
+  brackets or parentheses (``time [s]``, ``q1 [rad]``, ``qd1 (rad/s)``); one the package
+  does not read (``deg``, ``ms``) is refused, the torques' is free (they may hold
+  currents). A ``#`` before the header is allowed; later lines starting with ``#`` are
+  comments.
 
 Readers return the raw fields (checked later by :func:`._container.check_fields`); every
 problem is a ValueError naming the file, the field or line, what was expected and found.
@@ -46,6 +50,36 @@ _CSV_ALIASES = {
 }
 _CSV_FIELD = {alias: field for field, names in _CSV_ALIASES.items() for alias in names}
 _JOINT_COLUMN = re.compile(r"^([a-z_]+?)_?(\d+)$")
+#: The separators a CSV file's header may use, tried in this order.
+CSV_DELIMITERS = (",", ";", "\t")
+#: A unit after a column's name, in brackets or parentheses: ``q1 [rad]``, ``time (s)``.
+_UNIT = re.compile(r"^(.*?)\s*[\[(]\s*([^\])]*?)\s*[\])]$")
+#: The units each field may state (lower case, spaces removed); torques may state any
+#: (their columns may hold currents, see ``identify --drive-gains``).
+CSV_UNITS = {
+    "times": ("s", "sec", "second", "seconds"),
+    "positions": ("rad", "m"),
+    "velocities": ("rad/s", "m/s"),
+    "accelerations": ("rad/s^2", "rad/s2", "rad/s\u00b2", "rad/s/s", "m/s^2", "m/s2",
+                      "m/s\u00b2", "m/s/s"),
+}
+
+
+def _unit_checked(source: str, name: str, field: str, unit: str | None) -> None:
+    """A column's stated unit must be what the package reads (SI, radians)."""
+    if unit is None or field not in CSV_UNITS:
+        return
+    if unit.replace(" ", "").lower() not in CSV_UNITS[field]:
+        si = CSV_UNITS[field][0]
+        expected = si if field == "times" else (f"{si} ({si.replace('rad', 'm', 1)} on a "
+                                                f"prismatic joint)")
+        raise ValueError(f"{source}: column {name!r}: {field} in {unit!r}; expected "
+                         f"{expected}: convert the column (degrees: x pi/180)")
+
+
+def _delimiter(header: str) -> str:
+    """The header's separator: the first of :data:`CSV_DELIMITERS` it holds (else ',')."""
+    return next((d for d in CSV_DELIMITERS if d in header), ",")
 
 
 def read_npz(path: Path, source: str) -> tuple[dict, dict]:
@@ -94,13 +128,16 @@ def read_csv(path: Path, source: str, n_joints: int | None) -> tuple[dict, dict]
     if not lines:
         raise ValueError(f"{source}: no header line (the file is blank)")
     header_no, header = lines[0]
-    names = [c.strip() for c in header.lstrip().removeprefix("#").split(",")]
+    delimiter = _delimiter(header)
+    names = [c.strip() for c in header.lstrip().removeprefix("#").split(delimiter)]
     rows = [(no, line) for no, line in lines[1:] if not line.lstrip().startswith("#")]
     columns: dict[str, dict[int, int]] = {k: {} for k in _CSV_ALIASES}
     time_col, ignored = None, []
     seen: dict[str, int] = {}
     for c, name in enumerate(names):
-        key = name.lower()
+        stated = _UNIT.match(name)
+        key = (stated.group(1) if stated else name).lower()
+        unit = stated.group(2) if stated else None
         if key in seen:
             raise ValueError(
                 f"{source}: column {name!r}: appears twice in the header (columns "
@@ -112,9 +149,11 @@ def read_csv(path: Path, source: str, n_joints: int | None) -> tuple[dict, dict]
             if time_col is not None:
                 raise ValueError(f"{source}: column {name!r}: a second time column "
                                  f"(already {names[time_col]!r})")
+            _unit_checked(source, name, "times", unit)
             time_col = c
         elif match and match.group(1) in _CSV_FIELD:
             field = _CSV_FIELD[match.group(1)]
+            _unit_checked(source, name, field, unit)
             j = int(match.group(2))
             if j in columns[field]:
                 raise ValueError(f"{source}: column {name!r}: a second column for joint {j} "
@@ -125,7 +164,9 @@ def read_csv(path: Path, source: str, n_joints: int | None) -> tuple[dict, dict]
     if time_col is None:
         raise ValueError(
             f"{source}: column 'time': missing; expected a header like "
-            f"time,q1..qn,qd1..qdn,qdd1..qddn,tau1..taun, got {','.join(names)}"
+            f"time,q1..qn,qd1..qdn,qdd1..qddn,tau1..taun (separated by commas, semicolons "
+            f"or tabs; units in brackets allowed: time [s]), got {len(names)} column(s) "
+            f"{delimiter.join(names)!r}"
         )
     counts = {}
     for field, cols in columns.items():
@@ -162,12 +203,14 @@ def read_csv(path: Path, source: str, n_joints: int | None) -> tuple[dict, dict]
                          f"(no data lines after the header)")
     cells = []
     for no, line in rows:
-        parts = line.split(",")
+        parts = line.split(delimiter)
         if len(parts) != len(names):
             raise ValueError(
                 f"{source}: line {no}: expected {len(names)} fields (as the header), got "
                 f"{len(parts)} (ragged rows)"
             )
+        if delimiter != ",":  # a decimal comma, where commas do not separate
+            parts = [p.replace(",", ".") for p in parts]
         cells.append(parts)
     used = [time_col] + [columns[f][j] for f in counts for j in range(1, n + 1)]
     table = np.array(cells, dtype=object)[:, used]

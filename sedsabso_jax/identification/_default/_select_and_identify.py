@@ -18,8 +18,9 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from ...dynamics._robot import Robot
-from .._estimators._estimator import Estimator, Limits, ProgressCallback
-from .._fit._identify import identify
+from .._data_checks import check_selection_data
+from .._estimators._estimator import Estimator, Limits, ProgressCallback, per_joint
+from .._fit._identify import identified
 from .._model._candidates import candidate_models
 from .._model._checks import model_of
 from .._model._torque_model import TorqueModel
@@ -102,7 +103,10 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
     limits (the NRMS measure and the 1/limit weighting; candidates weighting by them are
     skipped without); ``progress(label, done, total)``: called after each fit, ``done`` running
     1..``total`` over the whole call (None: quiet). The rules between the options are
-    :class:`Choice`'s. Returns the :class:`~._report.IdentificationReport` the command
+    :class:`Choice`'s. Data that cannot give an answer are refused before the first fit
+    (:func:`~.._data_checks.check_selection_data`: too few samples for the largest
+    model, no motion, a poor excitation, torques 10 times the ``limits``, a validation
+    split too small to fit). Returns the :class:`~._report.IdentificationReport` the command
     prints (``text()``) and writes (``write(...)``)."""
     held = dict(named_recordings(robot, held_out))  # checked before any work
     recordings = recordings_of(robot, data)
@@ -114,6 +118,11 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
                     len(recordings), any(m.recordings > 1 for m in models))
     estimators = choice.estimators(estimators)
     chosen_by = choice.validation_of(recordings)
+    check_selection_data(robot, recordings, models, per_joint("limits", limits, robot.n_joints),
+                         chosen_by, held_out=None if held is None else held[0],
+                         regularized=choice.physical is True  # "cv" may choose none
+                         and not isinstance(choice.prior_strength, str)
+                         and choice.prior_strength > 0)
     kept = (validation.kept if isinstance(validation, DefaultValidation)
             and len(models) > 1 else None)
     # the fits after the model choice, for the progress: the prior's validation, the fit
@@ -138,7 +147,7 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
                                                 validation=chosen_by,  # type: ignore[arg-type]
                                                 limits=limits, progress=stages.stage(1))
         estimator, cv = prior_selection.estimator, prior_selection.cross_validation
-    ident = identify(robot, recordings, estimator, model, limits=limits)
+    ident = identified(robot, recordings, estimator, model, limits)[0]  # data checked above
     if progress is not None:
         progress("fit on all the data", stages.done + 1, stages.done + 1)
     return IdentificationReport.evaluate(ident, recordings, held or None, limits,

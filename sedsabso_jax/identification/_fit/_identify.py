@@ -34,6 +34,7 @@ from .._estimators._estimator import (
     per_joint,
 )
 from .._estimators._least_squares import OLS
+from .._data_checks import check_fit_data, pulled
 from .._metrics import nrms_over_limits
 from .._model._checks import model_of, regrouped_message
 from .._model._torque_model import TorqueModel
@@ -158,23 +159,32 @@ def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
         limits: per-joint torque limits (N m): the fit reports its NRMS over them; needed
             by ``sigma="limits"``.
 
+    Raises ValueError, before the fit, for data that cannot give an answer
+    (:func:`~.._data_checks.check_fit_data`: fewer than 5 torque equations per
+    parameter, no joint that moves, a regressor of the base parameters whose condition
+    number exceeds 1e6 without a prior, torques 10 times the ``limits``).
     Warns (``UserWarning``) with the condition number and the names of the columns
-    concerned when the stacked regressor is rank deficient or poorly conditioned, and
-    names the extra columns the base regressor already spans (left out).
+    concerned when the stacked regressor is rank deficient or poorly conditioned, names
+    a joint that never moves, and names the extra columns the base regressor already
+    spans (left out).
     """
-    return identified(robot, data, estimator, model, limits)[0]
+    return identified(robot, data, estimator, model, limits, check=True)[0]
 
 
 def identified(robot: Robot, data: Data, estimator: Estimator, model: TorqueModel | None,
-               limits: Limits) -> tuple[Identification, EstimatorFit]:
+               limits: Limits, *, check: bool = False) -> tuple[Identification, EstimatorFit]:
     """:func:`identify`'s result and the estimator's fit behind it (its weighted rows,
-    for what a caller derives from the values)."""
+    for what a caller derives from the values); ``check``: the data checked first
+    (:func:`~.._data_checks.check_fit_data`)."""
     checked_estimator(estimator)
     model = model_of(robot, model)
     limits = per_joint("limits", limits, robot.n_joints)
     estimator.check(model, limits)  # what can be checked before any data are read
     recordings = recordings_of(robot, data)
     model.check_recordings(len(recordings))
+    if check:
+        check_fit_data(robot, recordings, model.dim, model.base, limits,
+                       regularized=pulled(estimator))
     if model.regrouped:
         warnings.warn(regrouped_message(model), stacklevel=caller_stacklevel())
     q, qd, qdd, tau, index = stacked(recordings)

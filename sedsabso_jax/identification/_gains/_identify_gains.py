@@ -35,6 +35,7 @@ from jaxtyping import ArrayLike, Float
 from ..._deprecation import caller_stacklevel
 from ...dynamics._robot import Robot
 from ...measurements._transmission import Transmission, TransmissionLike
+from .._data_checks import check_payload_data
 from .._model._checks import model_of
 from .._model._load import LoadFriction
 from .._model._offset import Offset
@@ -163,8 +164,11 @@ def identify_drive_gains(robot: Robot, unloaded: Data, loaded: Data, link: str, 
             joint side); None: the joints' own currents.
         urdf: the URDF the robot was read from, to find a fixed link.
 
-    Raises ValueError for a non-positive mass, missing recordings, a link the loaded
-    motion does not excite; warns naming each joint the data do not calibrate (relative
+    Raises ValueError for a non-positive mass, missing recordings, too few samples for
+    the unknowns (5 torque equations each), recordings where no joint moves, a
+    recording given both loaded and unloaded
+    (:func:`~.._data_checks.check_payload_data`), a link the loaded motion does not
+    excite; warns naming each joint the data do not calibrate (relative
     standard deviation above :data:`~._result.CALIBRATED_STD`).
     """
     if not isinstance(robot, Robot):
@@ -184,6 +188,7 @@ def identify_drive_gains(robot: Robot, unloaded: Data, loaded: Data, link: str, 
     term = PayloadInertia(k, tuple(float(v) for v in np.reshape(T, -1)),
                           tuple(range(len(unloaded_recs), len(recordings))))
     full = with_payload(base_model, term)
+    check_payload_data(robot, unloaded_recs, loaded_recs, full.dim + robot.n_joints)
     signals = stacked(recordings)
     first_eq = equations(full.without_waiting(), signals, motors, mass, r)
     _excited(first_eq, link)
@@ -219,9 +224,9 @@ def _result(eq: GainEquations, sol: Solution, signals: tuple, motors: np.ndarray
              "samples_loaded": int(on.sum()), "samples_unloaded": int((~on).sum()),
              "condition_number": LinearFit.of(sol.W, sol.residual).condition(
                  np.arange(eq.free.size, sol.theta.size))},
-        settings=settings)
-    poor = [f"{i + 1} ({f'{100 * r:.2g} %' if np.isfinite(r) else 'not determined'})"
-            for i, r in enumerate(found.relative_std) if not r <= CALIBRATED_STD]
+        settings=settings, joint_names=tuple(eq.model.robot.joint_names))
+    poor = [f"{name} ({f'{100 * r:.2g} %' if np.isfinite(r) else 'not determined'})"
+            for name, r in zip(found.labels, found.relative_std) if not r <= CALIBRATED_STD]
     if poor:
         plural = "s" if len(poor) > 1 else ""
         label = "motor" if found.motor_side else "joint"

@@ -107,7 +107,11 @@ def maximum_likelihood(eq: GainEquations, start: np.ndarray
     problem = Likelihood(eq)
     x, g = start[:problem.p], start[problem.p:]
     if not np.all(np.isfinite(g)) or np.any(g == 0):
-        raise ValueError("drive gains: the start of the maximum likelihood has a zero gain")
+        joints = [int(j) + 1 for j in np.flatnonzero(~np.isfinite(g) | (g == 0))]
+        raise ValueError(f"drive gains: the data do not determine the gains of joints (or "
+                         f"motors) {joints}: a first total least-squares fit gives them 0 or "
+                         f"none; record motions of every joint with the payload and without "
+                         f"it, or give those gains")
     h = 1.0 / g
     steps = []
     for _ in range(2):  # the weights at the start, then at the first optimum

@@ -42,6 +42,8 @@ class DriveGains:
             other columns.
         settings: the link, mass, centre of mass, torque model, method and the solver's
             report.
+        joint_names: the robot's names of its joints (a URDF's), which label the gains
+            on the joint side (:attr:`labels`).
     """
 
     gains: np.ndarray
@@ -55,6 +57,7 @@ class DriveGains:
     robot_std: np.ndarray
     fit: dict
     settings: dict
+    joint_names: tuple[str, ...] = ()
 
     def __post_init__(self):
         for value in vars(self).values():
@@ -72,6 +75,16 @@ class DriveGains:
         """Per gain: whether the data calibrate it, its relative standard deviation at
         most :data:`CALIBRATED_STD`."""
         return self.relative_std <= CALIBRATED_STD
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """What each gain belongs to, as the table and the warnings name it: the joint's
+        name (as ``identify`` names joints), or behind a transmission the motor's number
+        (from 1)."""
+        n = self.gains.size
+        if self.motor_side or len(self.joint_names) != n:
+            return tuple(str(i + 1) for i in range(n))
+        return tuple(self.joint_names)
 
     @property
     def motor_side(self) -> bool:
@@ -101,6 +114,8 @@ class DriveGains:
             "drive_gains": self.gains, "drive_gains_std": self.std,
             "relative_std_percent": 100 * self.relative_std,
             "calibrated": self.calibrated, "motor_side": self.motor_side,
+            "names": [f"motor {k}" for k in self.labels] if self.motor_side
+            else list(self.labels),
             "unit": "torque per unit of the recorded quantity (N m / A for currents)",
             "method": self.method,
             "payload": {"names": PAYLOAD_PARAMETERS, "params10": self.payload10,
@@ -112,11 +127,11 @@ class DriveGains:
     def text(self) -> str:
         """The gains as a markdown table: motor, gain, std, relative std, calibrated."""
         label = "motor" if self.motor_side else "joint"
-        cells = [[str(i + 1), "not determined" if not np.isfinite(g) else f"{g:.6g}",
+        cells = [[name, "not determined" if not np.isfinite(g) else f"{g:.6g}",
                   "inf" if not np.isfinite(s) else f"{s:.3g}",
                   "inf" if not np.isfinite(r) else f"{100 * r:.3g}", "yes" if ok else "NO"]
-                 for i, (g, s, r, ok) in enumerate(zip(self.gains, self.std,
-                                                       self.relative_std, self.calibrated))]
+                 for name, g, s, r, ok in zip(self.labels, self.gains, self.std,
+                                              self.relative_std, self.calibrated)]
         head = (f"drive gains (torque per unit recorded) by {GAIN_METHODS[self.method].label}, "
                 f"payload {self.settings['mass']:g} kg on {self.settings['link']}")
         return head + "\n\n" + markdown_table(
@@ -137,8 +152,11 @@ def read_gains(doc: Any, n: int, source: str) -> np.ndarray:
                          f"writes)")
     if len(gains) != n:
         raise ValueError(f"{source}: {len(gains)} drive gains, expected {n} (one per joint)")
-    missing = [i + 1 for i, g in enumerate(gains) if not isinstance(g, (int, float))]
+    names = doc.get("names")
+    if not (isinstance(names, list) and len(names) == n):
+        names = [str(i + 1) for i in range(n)]
+    missing = [names[i] for i, g in enumerate(gains) if not isinstance(g, (int, float))]
     if missing:
-        raise ValueError(f"{source}: the drive gains of joints {missing} were not determined "
-                         f"(null): calibrate them, or give the gains as numbers")
+        raise ValueError(f"{source}: the drive gains of joints {', '.join(missing)} were not "
+                         f"determined (null): calibrate them, or give the gains as numbers")
     return np.asarray(gains, dtype=float)

@@ -82,6 +82,12 @@ class Presliding(AbstractScale):
                 raise ValueError(f"friction term 'presliding': expected presliding:fit:LARGEST "
                                  f"(rad, the largest displacement searched), got "
                                  f"presliding:{option}") from None
+            lo, hi = cls.bounds
+            if not lo < largest <= hi:  # NaN too
+                raise ValueError(f"friction term 'presliding': presliding:fit:LARGEST searches "
+                                 f"each joint's displacement up to LARGEST rad, a number in "
+                                 f"({lo:g}, {hi:g}], got presliding:{option} (e.g. "
+                                 f"presliding:fit:{LARGEST_AT_REST:g})")
             return cls(fitted=True, largest=largest)
         return super().parse(option)
 

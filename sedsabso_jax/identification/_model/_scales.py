@@ -84,13 +84,15 @@ class AbstractScale(AbstractTerm):
     def parse(cls, option: str | None) -> AbstractTerm:
         if option is None or option == "fit":
             return cls(fitted=option == "fit")  # type: ignore[call-arg]
+        expected = (f"friction term {cls.name!r}: expected {cls.name}:fit or "
+                    f"{cls.name}:{cls.scale_name.upper()} ({cls.scale_unit}, one or one per "
+                    f"joint, comma-separated")
         try:
             values = [float(v) for v in option.split(",")]
         except ValueError:
-            raise ValueError(f"friction term {cls.name!r}: expected {cls.name}:fit or "
-                             f"{cls.name}:{cls.scale_name.upper()} ({cls.scale_unit}, one "
-                             f"or one per joint, comma-separated), got "
-                             f"{cls.name}:{option}") from None
+            raise ValueError(f"{expected}), got {cls.name}:{option}") from None
+        if not all(0 < v < float("inf") for v in values):  # NaN too
+            raise ValueError(f"{expected}, each > 0), got {cls.name}:{option}")
         return cls(**{cls.scale_name: values[0] if len(values) == 1  # type: ignore[arg-type]
                       else tuple(values)})
 

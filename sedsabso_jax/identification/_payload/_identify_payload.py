@@ -39,6 +39,7 @@ from ..._deprecation import caller_stacklevel
 from ..._output import jsonable
 from ...dynamics._regressor import inverse_dynamics
 from ...dynamics._robot import N_LINK_PARAMETERS, Robot
+from .._data_checks import check_payload_data
 from .._estimators._estimator import Estimator, checked_estimator
 from .._estimators._least_squares import WLS, PhysicallyConsistent
 from .._fit._identify import Identification, identified
@@ -178,7 +179,10 @@ def identify_payload(robot: Robot | Identification, loaded: Data, link: str, *,
             unloaded recordings first, then the loaded ones.
         urdf: the URDF the robot was read from, to find a fixed link.
 
-    Raises ValueError when the loaded recordings do not determine the payload's mass
+    Raises ValueError, before any fit, for too few samples for the parameters (5
+    torque equations each), recordings where no joint moves and a recording given both
+    loaded and unloaded (:func:`~.._data_checks.check_payload_data`), and when the
+    loaded recordings do not determine the payload's mass
     (e.g. a link whose every joint axis passes through the payload's frame origin, or a
     link moved only by a vertical axis), and warns when its standard deviation exceeds
     :data:`POOR_MASS` of it.
@@ -195,6 +199,7 @@ def identify_payload(robot: Robot | Identification, loaded: Data, link: str, *,
     term = PayloadInertia(k, T, tuple(range(len(unloaded_recs), len(recordings))))  # type: ignore[arg-type]
     if unloaded_recs:
         tm = _joint_model(robot, model, len(recordings))
+        check_payload_data(rob, unloaded_recs, loaded_recs, tm.dim + 10)
         found = _joint_fit(rob, recordings, tm, term, estimator, link)
     else:
         if model is not None:
@@ -204,6 +209,7 @@ def identify_payload(robot: Robot | Identification, loaded: Data, link: str, *,
             raise ValueError(f"without unloaded recordings the payload is fitted by least "
                              f"squares: use OLS, WLS or their physically consistent form, "
                              f"not {estimator.name!r}")
+        check_payload_data(rob, [], loaded_recs, 10)
         tm, found = None, _fixed_fit(robot, rob, recordings, term, estimator, link)
     p = found["p"]
     jac = np.asarray(jax.jacfwd(quantities)(jnp.asarray(p)))

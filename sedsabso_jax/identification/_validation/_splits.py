@@ -193,14 +193,19 @@ class SpeedSplits(Validation):
         peak = peak_speed(qd)
         moving = np.flatnonzero(peak > 0)
         if moving.size == 0:
-            raise ValueError("SpeedSplits: no joint moves in the data")
+            raise ValueError("speed splits: no joint moves in the data (every joint's "
+                             "speed is 0): they need a motion")
         speed = np.abs(qd[:, moving]) / peak[moving]
         train = tuple(speed[:, i] < self.fit_below for i in range(moving.size))
         test = tuple(speed[:, i] > self.predict_above for i in range(moving.size))
         for i, (a, b) in enumerate(zip(train, test)):
             if not a.any() or not b.any():
-                raise ValueError(f"SpeedSplits: joint {moving[i] + 1} has no samples "
-                                 f"{'below' if not a.any() else 'above'} the threshold")
+                raise ValueError(
+                    f"speed splits: joint {moving[i] + 1} never moves "
+                    f"{'slower' if not a.any() else 'faster'} than "
+                    f"{self.fit_below if not a.any() else self.predict_above:g} of its peak "
+                    f"speed: nothing to {'fit' if not a.any() else 'predict'}; choose "
+                    f"another validation")
         return Splits(train, test, tuple(f"joint {j + 1} faster" for j in moving))
 
     def describe(self) -> str:
