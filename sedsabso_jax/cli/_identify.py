@@ -196,8 +196,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--no-physical. Flags may also come from a --config file; the command line wins.",
         examples=["sedsabso-jax identify --robot kuka_lwr4 --data run1.npz --validate "
                   "run2.npz",
-                  "sedsabso-jax identify --robot kuka_lwr4 --data run1.npz --validate "
-                  "pick.npz fast.npz",
+                  "sedsabso-jax identify --robot kuka_lwr4 --data a.npz --validate b.npz "
+                  "c.npz",
                   "sedsabso-jax identify --config identify.toml --physical --out results"])
     inp = ip.add_argument_group("input", "the robot, its data, and how the data are loaded")
     add_robot(inp)

@@ -318,18 +318,18 @@ def pulled(estimator) -> bool:
 
 def check_selection_data(robot: Robot, recordings: Sequence[Measurements], models: Sequence,
                          limits, validation, *, regularized: bool = False,
-                         held_out: Measurements | None = None) -> None:
+                         held_out: Sequence[Measurements] = ()) -> None:
     """:func:`~sedsabso_jax.select_and_identify`'s checks before its first fit: the data
     for the largest of ``models`` (:func:`check_fit_data`), every split of
     ``validation`` (None: none) fittable (:func:`check_splits`), and the torques of
-    ``held_out`` within reach of ``limits``."""
+    each ``held_out`` recording within reach of ``limits``."""
     n_parameters = max(m.dim for m in models)
     check_fit_data(robot, recordings, n_parameters, models[0].base, limits,
                    regularized=regularized, what="the largest torque model tried")
     if validation is not None:
         check_splits(validation.splits(recordings), robot.n_joints, n_parameters)
-    if held_out is not None:
-        check_torques(robot, [held_out], limits, warn=False)
+    if held_out:
+        check_torques(robot, list(held_out), limits, warn=False)
 
 
 def check_payload_data(robot: Robot, unloaded: Sequence[Measurements],

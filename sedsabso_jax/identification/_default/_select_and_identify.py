@@ -119,7 +119,7 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
     estimators = choice.estimators(estimators)
     chosen_by = choice.validation_of(recordings)
     check_selection_data(robot, recordings, models, per_joint("limits", limits, robot.n_joints),
-                         chosen_by, held_out=None if held is None else held[0],
+                         chosen_by, held_out=list(held.values()),
                          regularized=choice.physical is True  # "cv" may choose none
                          and not isinstance(choice.prior_strength, str)
                          and choice.prior_strength > 0)
