@@ -88,11 +88,12 @@ def report_settings(settings) -> dict:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The ``compare`` subcommand's flags (its defaults are ``compare``'s own)."""
-    from ..compare._bbob import DEFAULT_INSTANCES, DIMENSIONS, FUNCTIONS, ranges
-    from ..compare._run import DEFAULT_ALGORITHMS, DEFAULT_BUDGET
+    from ._vocabulary import BBOB_DIMENSIONS, BBOB_FUNCTIONS, BBOB_INSTANCES
+    from ._vocabulary import COMPARE_ALGORITHMS as DEFAULT_ALGORITHMS
+    from ._vocabulary import COMPARE_BUDGET as DEFAULT_BUDGET
 
-    functions, instances = ranges(range(1, len(FUNCTIONS) + 1)), ranges(DEFAULT_INSTANCES)
-    dimensions = ",".join(map(str, DIMENSIONS))
+    functions, instances = BBOB_FUNCTIONS, BBOB_INSTANCES
+    dimensions = ",".join(map(str, BBOB_DIMENSIONS))
 
     cp = subcommand(
         sub, "compare",
