@@ -45,12 +45,16 @@ if TYPE_CHECKING:
     from .excitation._design import design_excitation as design_excitation
     from .excitation._trajectory import FourierTrajectory as FourierTrajectory
     from .identification._default._report import IdentificationReport as IdentificationReport
-    from .identification._default._select_and_identify import select_and_identify as select_and_identify
+    from .identification._default._select_and_identify import (
+        select_and_identify as select_and_identify,
+    )
     from .identification._estimators._box_search import BoxSearch as BoxSearch
     from .identification._estimators._estimator import Estimator as Estimator
     from .identification._estimators._least_squares import OLS as OLS
     from .identification._estimators._least_squares import WLS as WLS
-    from .identification._estimators._least_squares import PhysicallyConsistent as PhysicallyConsistent
+    from .identification._estimators._least_squares import (
+        PhysicallyConsistent as PhysicallyConsistent,
+    )
     from .identification._estimators._row_fits import L1 as L1
     from .identification._estimators._row_fits import LevenbergMarquardt as LevenbergMarquardt
     from .identification._fit._identify import Identification as Identification
@@ -70,7 +74,9 @@ if TYPE_CHECKING:
     from .identification._model._torque_model import TorqueModel as TorqueModel
     from .identification._payload._identify_payload import identify_payload as identify_payload
     from .identification._payload._result import Payload as Payload
-    from .identification._validation._selection import choose_prior_strength as choose_prior_strength
+    from .identification._validation._selection import (
+        choose_prior_strength as choose_prior_strength,
+    )
     from .identification._validation._selection import cross_validate as cross_validate
     from .identification._validation._selection import select_model as select_model
     from .identification._validation._splits import GivenFolds as GivenFolds

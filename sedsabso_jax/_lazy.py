@@ -47,8 +47,8 @@ def attach(package: str) -> tuple[Callable[[str], Any], Callable[[], list[str]]]
     imports under its ``if TYPE_CHECKING:`` (:func:`imports`); every name of its
     ``__all__`` must be there or defined in it."""
     module = sys.modules[package]
-    loader = module.__spec__.loader if module.__spec__ is not None else None
-    source = loader.get_source(package) if loader is not None else None  # type: ignore[attr-defined]
+    loader: Any = module.__spec__.loader if module.__spec__ is not None else None
+    source = loader.get_source(package) if loader is not None else None
     if source is None:
         raise ImportError(f"{package}: its source is needed to import its names lazily")
     table = imports(source)

@@ -56,6 +56,21 @@ def test_import_imports_no_jax_and_the_names_come_when_used():
     assert found["missing"] == "module 'sedsabso_jax' has no attribute 'no_such_name'"
 
 
+def test_reading_a_urdf_imports_no_torch():
+    """pytorch-kinematics' URDF parser without its package, which imports torch (seconds
+    to import, and to exit)."""
+    found = _fresh("""
+        import json, sys
+        import jax
+        jax.config.update("jax_enable_x64", True)
+        import sedsabso_jax as sj
+        robot = sj.robots.kuka_lwr4()
+        print(json.dumps({"joints": robot.n_joints, "torch": "torch" in sys.modules,
+                          "pk": "pytorch_kinematics" in sys.modules}))
+    """)
+    assert found == {"joints": 7, "torch": False, "pk": False}
+
+
 def test_the_lazy_table_is_the_root_all():
     """Every name of ``__all__`` is imported lazily from where the root's ``if
     TYPE_CHECKING:`` block says (what mypy and the documentation read), or defined."""

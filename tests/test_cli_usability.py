@@ -380,5 +380,5 @@ def test_progress_lines_weigh_the_work_and_pace_from_the_first_call():
         "identify:   1%, 30 s: first fit",
         "identify:  11%, 40 s, ~89 s left: tenth",   # (40-30)/(11-1) s per estimated s x 89
         "identify:  51%, 70 s, ~39 s left: revised",  # 40 s for 40, total now 70 + 10
-        "identify:  88%, 100 s, ~10 s left: last",
+        "identify:  87%, 100 s, ~10 s left: last",
         "identify: 100%, 102 s: written"]

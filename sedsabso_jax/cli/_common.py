@@ -110,7 +110,9 @@ LINE_EVERY, PACE_SHARE = 0.1, 0.05
 
 
 def duration(seconds: float) -> str:
-    """``45 s`` under two minutes, else ``3.2 min``."""
+    """``<1 s``, ``45 s`` under two minutes, else ``3.2 min``."""
+    if seconds < 0.5:
+        return "<1 s"
     return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.1f} min"
 
 
@@ -149,11 +151,16 @@ class LineProgress(Progress):
             return
         self.shown = step
         start, done0 = self.first
-        left = ""
+        left = None
         if share < 1.0 and done - done0 >= PACE_SHARE * self.total and now > start:
-            left = f", ~{duration((now - start) / (done - done0) * (self.total - done))} left"
-        print(f"{self.what}: {100 * share:3.0f}%, {duration(now - self.start)}{left}: "
-              f"{label}", file=self.stream, flush=True)
+            left = (now - start) / (done - done0) * (self.total - done)
+        print(self.line(share, now - self.start, left, label), file=self.stream, flush=True)
+
+    def line(self, share: float, elapsed: float, left: float | None, label: str) -> str:
+        """One line: the share of the work done (rounded down), the seconds so far, the
+        time left."""
+        ahead = "" if left is None else f", {'' if left < 0.5 else '~'}{duration(left)} left"
+        return f"{self.what}: {math.floor(100 * share):3d}%, {duration(elapsed)}{ahead}: {label}"
 
     def finish(self, label: str) -> None:
         """The command's own work done: the last line (off a terminal)."""

@@ -10,10 +10,7 @@ measures applied to them."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from ._experiment import Settings
+from typing import Any
 
 #: Per step: seconds, and seconds per unit of its work: the design's iterations x
 #: samples / 1000, the samples, a swarm's runs x iterations x samples / 1000.
@@ -26,11 +23,12 @@ STEPS = {"base parameters": (1.2, 0.0), "excitation design": (10.4, 0.176),
 WRITE = (3.0, 0.25)
 
 
-def step_seconds(settings: Settings, swarms: tuple[str, ...], baselines: tuple[str, ...]
+def step_seconds(settings: Any, swarms: tuple[str, ...], baselines: tuple[str, ...]
                  ) -> list[float]:
-    """The estimated seconds of each step of :func:`~._experiment.run` in its order: the
-    base parameters, the excitation design, the simulated measurements, each of
-    ``swarms``, each of ``baselines`` (a name with no estimate counts as a second)."""
+    """The estimated seconds of each step of :func:`~._experiment.run` with ``settings``
+    (its :class:`~._experiment.Settings`) in its order: the base parameters, the
+    excitation design, the simulated measurements, each of ``swarms``, each of
+    ``baselines`` (a name with no estimate counts as a second)."""
     from ..excitation._design import DesignSearch
 
     design = settings.design_iterations or DesignSearch().iterations
@@ -45,6 +43,7 @@ def step_seconds(settings: Settings, swarms: tuple[str, ...], baselines: tuple[s
             * units.get(name, 0.0) for name in names]
 
 
-def write_seconds(settings: Settings) -> float:
-    """The estimated seconds of writing the tables and figures."""
+def write_seconds(settings: Any) -> float:
+    """The estimated seconds of writing the tables and figures with ``settings`` (the
+    experiment's :class:`~._experiment.Settings`)."""
     return WRITE[0] + WRITE[1] * settings.runs * settings.iterations / 1000

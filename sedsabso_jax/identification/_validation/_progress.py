@@ -6,17 +6,14 @@ up as the fits end (:class:`Fits`)."""
 from __future__ import annotations
 
 from collections.abc import Callable, Collection, Sequence
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from .._estimators._estimator import Estimator, ProgressCallback
+from .._fit._samples import Samples
 from .._model._torque_model import TorqueModel
 from .._work import fit_seconds, parts
 from ._kept_terms import KeptTerms
-
-if TYPE_CHECKING:
-    from ._selection import Prepared
+from ._splits import Splits
 
 
 class Fits:
@@ -40,29 +37,32 @@ class Fits:
         return fitted
 
 
-def split_seconds(prepared: Prepared, estimator: Estimator, model: TorqueModel,
+def train_rows(samples: Samples, splits: Splits) -> list[int]:
+    """The rows (samples x joints) each split fits."""
+    return [samples.q.shape[1] * int(np.count_nonzero(t)) for t in splits.train]
+
+
+def split_seconds(rows: Sequence[int], estimator: Estimator, model: TorqueModel,
                   new: Collection[str] = ()) -> list[float]:
-    """The estimated seconds of each split's fit (:func:`~.._work.fit_seconds`), the
-    first setting up the parts ``new``."""
-    rows = [prepared.samples.q.shape[1] * int(np.count_nonzero(t))
-            for t in prepared.splits.train]
+    """The estimated seconds of each split's fit (:func:`~.._work.fit_seconds`; ``rows``:
+    :func:`train_rows`), the first setting up the parts ``new``."""
     return [fit_seconds(estimator, model, r, new=new if i == 0 else ())
             for i, r in enumerate(rows)]
 
 
-def grid_seconds(prepared: Prepared, grid: Sequence[tuple[Estimator, TorqueModel]],
+def grid_seconds(rows: Sequence[int], grid: Sequence[tuple[Estimator, TorqueModel]],
                  seen: Collection[str] = ()) -> list[list[float]]:
     """Each candidate's :func:`split_seconds`, in order: the first with a part
     (:func:`~.._work.parts`) not in ``seen`` (the parts of the fits before) sets it up."""
     out, done = [], set(seen)
     for estimator, model in grid:
-        out.append(split_seconds(prepared, estimator, model, parts(estimator, model) - done))
+        out.append(split_seconds(rows, estimator, model, parts(estimator, model) - done))
         done |= parts(estimator, model)
     return out
 
 
-def kept_seconds(prepared: Prepared, kept: KeptTerms, estimator: Estimator,
+def kept_seconds(rows: Sequence[int], kept: KeptTerms, estimator: Estimator,
                  model: TorqueModel, seen: Collection[str]) -> list[list[float]]:
     """The :func:`split_seconds` of validating each of ``kept``'s terms added to
     ``model`` with ``estimator``, after fits with the parts ``seen``."""
-    return grid_seconds(prepared, [(estimator, m) for m in kept.models(model)], seen)
+    return grid_seconds(rows, [(estimator, m) for m in kept.models(model)], seen)

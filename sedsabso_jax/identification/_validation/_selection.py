@@ -68,7 +68,7 @@ from ._cross_validation import CrossValidation as CrossValidation
 from ._cross_validation import cross_validation_of, not_worse
 from ._kept_terms import KeptTerms
 from ._phase import DEFAULT_FOLDS as DEFAULT_FOLDS
-from ._progress import Fits, grid_seconds, kept_seconds, split_seconds
+from ._progress import Fits, grid_seconds, kept_seconds, split_seconds, train_rows
 from ._splits import PhaseFolds, Splits, Validation
 
 #: The candidate estimators of :func:`select_model` (their weightings), simplest first.
@@ -121,7 +121,8 @@ def cross_validate(robot: Robot, data: Data, estimator: Estimator = OLS(),
     model = model_of(robot, model)
     limits = per_joint("limits", limits, robot.n_joints)
     checked_estimator(estimator).check(model, limits)
-    each = split_seconds(prepared, estimator, model, parts(estimator, model))
+    each = split_seconds(train_rows(prepared.samples, prepared.splits), estimator, model,
+                         parts(estimator, model))
     fits = Fits(progress, sum(each))
     return prepared.validate(estimator, model, limits,
                              fits.after(f"{estimator.name}, {model.friction}", each))
@@ -234,10 +235,10 @@ def select_model(robot: Robot, data: Data, *,
     if not models or not estimators:
         raise ValueError("select_model needs at least one torque model and one estimator")
     grid = [(estimator, model) for model in models for estimator in estimators]
-    each = grid_seconds(prepared, grid)
-    seen = set().union(*(parts(e, m) for e, m in grid))
+    rows = train_rows(prepared.samples, prepared.splits)
+    each, seen = grid_seconds(rows, grid), set().union(*(parts(e, m) for e, m in grid))
     fits = Fits(progress, sum(map(sum, each)) + (0.0 if kept is None else max(
-        sum(map(sum, kept_seconds(prepared, kept, e, models[-1], seen))) for e in estimators)))
+        sum(map(sum, kept_seconds(rows, kept, e, models[-1], seen))) for e in estimators)))
     tried, options = [], []
     for (estimator, model), seconds in zip(grid, each):
         checked_estimator(estimator).check(model, limits)
@@ -261,8 +262,8 @@ def _with_kept(kept: KeptTerms, index: int, tried: list, options: list,
     """Validate ``kept``'s terms added to candidate ``index`` (appended to ``tried`` and
     ``options``); the index of the candidate kept."""
     estimator, model = options[index]
-    each = kept_seconds(prepared, kept, estimator, model,
-                        set().union(*(parts(e, m) for e, m in options)))
+    each = kept_seconds(train_rows(prepared.samples, prepared.splits), kept, estimator,
+                        model, set().union(*(parts(e, m) for e, m in options)))
     fits.total = fits.done + sum(map(sum, each))
     found = []
     for with_terms, seconds in zip(kept.models(model), each):
@@ -336,7 +337,7 @@ def choose_prior_strength(robot: Robot, data: Data,
     limits = per_joint("limits", limits, robot.n_joints)
     estimator.check(model, limits)
     tried, estimators = [], []
-    each = split_seconds(prepared, estimator, model)
+    each = split_seconds(train_rows(prepared.samples, prepared.splits), estimator, model)
     fits = Fits(progress, sum(each) * len(strengths))
     for v in strengths:
         estimators.append(dataclasses.replace(estimator, prior_strength=v))
