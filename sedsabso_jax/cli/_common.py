@@ -1,6 +1,7 @@
 """What the subcommands share: their help's layout (argument groups, an epilog of examples
-and exit statuses), argument types that say what they expected, the progress bar, and the
-check that outputs can be written before a long run."""
+and exit statuses), argument types that say what they expected, the progress (a bar on a
+terminal, lines elsewhere), and the checks, before JAX is imported, that the files named
+can be read and the outputs written."""
 
 from __future__ import annotations
 
