@@ -355,7 +355,8 @@ def test_identify_draws_no_bar_off_a_terminal(data_file, capsys):
     err = capsys.readouterr().err
     assert not re.search(r"[\r█|]|fit/s", err), err
     lines = err.splitlines()
-    assert all(re.fullmatch(r"identify: +\d+%, \d+ s(, ~[\d.]+ (s|min) left)?: .+", line)
+    elapsed, left = r"(<1|\d+) s", r"(~[\d.]+ (s|min)|<1 s)"
+    assert all(re.fullmatch(rf"identify: +\d+%, {elapsed}(, {left} left)?: .+", line)
                for line in lines), err
     assert lines[-1].startswith("identify: 100%") and lines[-1].endswith(": done")
 
