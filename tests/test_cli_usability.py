@@ -256,8 +256,13 @@ def test_yaml_config_without_pyyaml_says_what_to_do(tmp_path, monkeypatch, capsy
 
 
 # ----------------------------------------------------------------------------- progress
-def test_select_and_identify_reports_each_fit(data_file):
-    calls: list[tuple[str, int, int]] = []
+def test_select_and_identify_reports_its_work(data_file):
+    """``progress`` reports work in estimated seconds, each fit's known before it runs:
+    the splits' conic fits (the first sets the conic solver up), the fit on all the data,
+    the evaluation; ``done`` grows to ``total``."""
+    from sedsabso_jax.identification import _work
+
+    calls: list[tuple[str, float, float]] = []
     data = sj.load_measurements(data_file, n_joints=3)
     robot = sj.robots.rs010n()
     plain = sj.TorqueModel.of(robot)
@@ -267,14 +272,27 @@ def test_select_and_identify_reports_each_fit(data_file):
                                     physical=True,
                                     prior_strength=1e-3,
                                     progress=lambda *call: calls.append(call))
-    # 3 speed splits' and 5 phase folds' conic fits, then the fit on all the data
-    assert [c[1:] for c in calls] == [(k, 9) for k in range(1, 10)]
-    assert calls[-1][0] == "fit on all the data"
+    # 3 speed splits' and 5 phase folds' conic fits, the candidate validated (the work
+    # after it revised), the fit on all the data, the evaluation
+    assert [c[0] for c in calls] == (["OLS physical, viscous-coulomb"] * 8 + [
+        "validated: OLS, viscous-coulomb", "fit on all the data", "evaluated"])
+    done, total = [c[1] for c in calls], calls[-1][2]
+    assert all(c[2] == pytest.approx(total) for c in calls) and done[-1] == total
+    steps = np.diff([0.0, *done])
+    assert (np.delete(steps, 8) > 0).all() and steps[8] == 0
+    estimator = sj.PhysicallyConsistent(sj.OLS(), prior_strength=1e-3)
+    assert steps[0] - max(steps[1:8]) > 0.9 * _work.SETUP["conic"]
+    assert steps[-2] == pytest.approx(_work.fit_seconds(estimator, plain, data.q.size,
+                                                        final=True))
+    assert steps[-1] == pytest.approx(_work.evaluate_seconds(plain, data.q.size))
     assert report.text() == quiet.text()  # the callback changes nothing
 
 
-def test_model_choice_and_prior_report_each_fit(data_file):
-    calls: list[tuple[str, int, int]] = []
+def test_model_choice_and_prior_report_their_work(data_file):
+    """The fits that search (friction at rest, kept unless worse) weigh more than the
+    grid's least squares, the fit on all the data more than any split; the total is
+    revised when the choice is made and ends where the work does."""
+    calls: list[tuple[str, float, float]] = []
     data = sj.load_measurements(data_file, n_joints=3)
     robot = sj.robots.rs010n()
     sj.select_and_identify(robot, data, estimators=(sj.OLS(), sj.WLS()),
@@ -282,11 +300,18 @@ def test_model_choice_and_prior_report_each_fit(data_file):
                            validation=sj.identification.DefaultValidation(3),
                            physical=True, prior_strength=1e-3,
                            progress=lambda *call: calls.append(call))
+    labels = [c[0] for c in calls]
     # candidates (with the pull to the prior), then friction at rest kept unless worse, x
-    # (3 speed splits + 3 phase folds), then the fit
-    total = (2 * 2 + 1) * (3 + 3) + 1
-    assert [c[1:] for c in calls] == [(k, total) for k in range(1, total + 1)]
-    assert calls[0][0] == "OLS physical, viscous-coulomb"
+    # (3 speed splits + 3 phase folds), the choice, the fit, the evaluation
+    assert len(calls) == (2 * 2 + 1) * (3 + 3) + 3
+    assert labels[0] == "OLS physical, viscous-coulomb" and labels[-1] == "evaluated"
+    assert labels[-3].startswith("chosen: ") and labels[-2] == "fit on all the data"
+    done = [c[1] for c in calls]
+    steps = np.diff([0.0, *done])
+    grid, kept = steps[1:24], steps[24:30]  # the first sets the conic solver up
+    assert all("kept unless worse" in label for label in labels[24:30])
+    assert kept.min() > 3 * grid.max() and steps[-2] > kept.max()
+    assert done == sorted(done) and done[-1] == calls[-1][2]
 
 
 def test_config_of_reproduce_and_compare(tmp_path):
@@ -323,7 +348,38 @@ def test_bars_only_on_a_terminal():
 
 
 def test_identify_draws_no_bar_off_a_terminal(data_file, capsys):
+    """Off a terminal, lines: the share of the work, the seconds so far and the time
+    left, the last when the report is written."""
     assert cli.main(["identify", "--robot", "rs010n", "--data", data_file, "--method", "OLS",
                      "--weights", "equal", "--friction", "viscous-coulomb"]) == 0
     err = capsys.readouterr().err
-    assert not re.search(r"[\r█|]|fit/s|%", err), err
+    assert not re.search(r"[\r█|]|fit/s", err), err
+    lines = err.splitlines()
+    elapsed, left = r"(<1|\d+) s", r"(~[\d.]+ (s|min)|<1 s)"
+    assert all(re.fullmatch(rf"identify: +\d+%, {elapsed}(, {left} left)?: .+", line)
+               for line in lines), err
+    assert lines[-1].startswith("identify: 100%") and lines[-1].endswith(": done")
+
+
+def test_progress_lines_weigh_the_work_and_pace_from_the_first_call():
+    """A line at each tenth of the work (not of the calls) and at the end; the time left
+    is the pace since the first call (what came before it sets none) applied to the work
+    left, the command's own after the library's (``then``) included; a revised total."""
+    from sedsabso_jax.cli._common import LineProgress
+
+    now = [0.0]
+    log = io.StringIO()
+    progress = LineProgress("identify", log, then=10.0, clock=lambda: now[0])
+    for t, label, done, total in [(30, "first fit", 1, 90), (31, "small", 2, 90),
+                                  (40, "tenth", 11, 90), (41, "no line", 12, 90),
+                                  (70, "revised", 41, 70), (100, "last", 70, 70)]:
+        now[0] = t
+        progress(label, done, total)
+    now[0] = 102
+    progress.finish("written")
+    assert log.getvalue().splitlines() == [
+        "identify:   1%, 30 s: first fit",
+        "identify:  11%, 40 s, ~89 s left: tenth",   # (40-30)/(11-1) s per estimated s x 89
+        "identify:  51%, 70 s, ~39 s left: revised",  # 40 s for 40, total now 70 + 10
+        "identify:  87%, 100 s, ~10 s left: last",
+        "identify: 100%, 102 s: written"]

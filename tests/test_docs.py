@@ -358,3 +358,21 @@ def test_the_compare_log_line_is_what_compare_writes():
     log = io.StringIO()
     CompareProgress(log)(m.group(4), int(m.group(1)), int(m.group(2)), float(m.group(3)))
     assert log.getvalue().rstrip("\n") == shown[0]
+
+
+def test_the_progress_lines_are_what_the_commands_write():
+    """command-line.md's example lines of ``identify`` and ``reproduce`` off a terminal."""
+    from sedsabso_jax.cli._common import LineProgress
+
+    page = DOCS / "how-to" / "command-line.md"
+    shown = [line for _, code, _ in blocks(page, "text") for line in code.splitlines()
+             if line.startswith(("identify: ", "reproduce: "))]
+    assert {line.split(":")[0] for line in shown} == {"identify", "reproduce"}, shown
+    for line in shown:
+        m = re.fullmatch(r"(\w+): +(\d+)%, (\d+) s(?:, ~(\d+) s left)?: (.+)", line)
+        assert m, f"{page.name}: {line!r} is not a progress line"
+        left = None if m.group(4) is None else float(m.group(4))
+        made = LineProgress(m.group(1)).line(int(m.group(2)) / 100, float(m.group(3)), left,
+                                             m.group(5))
+        assert made == line
+

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import os
+import re
 
 import matplotlib.image
 import numpy as np
@@ -17,15 +20,16 @@ FILES = ("table4.md", "table5.md", "fig5_population.png", "fig6_convergence.png"
          "results.json")
 
 
-#: The ``progress(label, done, total)`` calls of the run below.
-PROGRESS: list[tuple[str, int, int]] = []
+#: The ``progress(label, done, total)`` calls of the run below, and its stderr.
+PROGRESS: list[tuple[str, float, float]] = []
+STDERR = io.StringIO()
 
 
 @pytest.fixture(scope="module")
 def reproduced(tmp_path_factory):
     out = tmp_path_factory.mktemp("reproduce")
     run = experiment.run
-    with pytest.MonkeyPatch.context() as patch:  # the CLI's bar is off off a terminal
+    with pytest.MonkeyPatch.context() as patch, contextlib.redirect_stderr(STDERR):
         patch.setattr(experiment, "run", lambda settings, progress: run(
             settings, progress=lambda *call: (PROGRESS.append(call), progress(*call))))
         code = cli.main(["reproduce", *SMALL, "--out", str(out / "res"),
@@ -34,11 +38,33 @@ def reproduced(tmp_path_factory):
     return out
 
 
-def test_progress_counts_every_step_to_the_end(reproduced):
-    done = [d for _, d, _ in PROGRESS]
+def test_progress_weighs_every_step_to_the_end(reproduced):
+    """Before each step, the estimated seconds of the steps done (their estimates known
+    from the settings: the swarms' runs weigh most), then the end."""
+    from sedsabso_jax.reproduce._work import step_seconds
+
+    settings = experiment.Settings(runs=2, iterations=30, samples=200, design_iterations=5)
+    seconds = step_seconds(settings, tuple(experiment.SWARMS), experiment.BASELINES)
     total = PROGRESS[0][2]
-    assert all(t == total for _, _, t in PROGRESS)
-    assert done == list(range(total + 1)) and PROGRESS[-1][0] == "done"
+    assert all(t == total for _, _, t in PROGRESS) and total == pytest.approx(sum(seconds))
+    assert [d for _, d, _ in PROGRESS] == pytest.approx(list(np.cumsum([0.0, *seconds])))
+    assert [label for label, _, _ in PROGRESS] == [
+        "base parameters", "excitation design (Eq. 9)", "simulated measurements",
+        "SEDSABSO: 2 runs", "BSO: 2 runs", "LDWPSO: 2 runs", "OLS", "LM", "L1-LP", "done"]
+    assert PROGRESS[-1][0] == "done" and max(seconds) == seconds[3]  # SEDSABSO compiles most
+
+
+def test_progress_lines_off_a_terminal(reproduced):
+    """stderr is not a terminal here: a line at each step with the share of the work,
+    the seconds so far and the time left, and one when all is written."""
+    lines = STDERR.getvalue().splitlines()
+    assert len(lines) == len(PROGRESS) + 1, lines
+    elapsed, left = r"(<1|\d+) s", r"(~[\d.]+ (s|min)|<1 s)"
+    assert re.fullmatch(rf"reproduce:   0%, {elapsed}: base parameters", lines[0]), lines[0]
+    for line in lines[1:-1]:  # the time left once 5 % of the work has set the pace
+        assert re.fullmatch(rf"reproduce: +\d+%, {elapsed}(, {left} left)?: .+", line), line
+    assert all(" left: " in line for line in lines[4:-1]), lines
+    assert re.fullmatch(rf"reproduce: 100%, {elapsed}: written", lines[-1]), lines[-1]
 
 
 def test_writes_every_file(reproduced):

@@ -45,6 +45,9 @@ RESTS = ["tests/test_rests.py"]
 HELD_OUT = ["tests/test_held_out.py"]
 SAME = ["tests/test_same_answer.py"]
 DEGENERATE = ["tests/test_degenerate_inputs.py"]
+STARTUP = ["tests/test_cli_startup.py"]
+USABILITY = ["tests/test_cli_usability.py"]
+REPRODUCE = ["tests/test_reproduce.py"]
 
 #: (module, text, replacement, what the bug is, tests to run, reason if equivalent)
 BUGS = [
@@ -501,6 +504,42 @@ BUGS = [
      '        if self.motor_side or len(self.joint_names) != n:',
      '        if True:',
      'gains labelled 1..n', DEGENERATE, None),
+    ("cli/_main.py", "    parser = build_parser()\n    args = config.parse_args(",
+     "    import jax  # noqa: F401\n    parser = build_parser()\n    args = config.parse_args(",
+     "the command imports JAX before it parses", STARTUP, None),
+    ("cli/_main.py",
+     "        check_files(args)  # before JAX is imported: a missing file is said at once\n",
+     "", "files checked only once the command runs, after JAX", STARTUP, None),
+    ("cli/_identify.py", "    from ._vocabulary import ESTIMATORS, FRICTION_CANDIDATES, "
+     "FRICTION_TERMS, PRIOR_STRENGTHS\n",
+     "    from ._vocabulary import ESTIMATORS, FRICTION_CANDIDATES, PRIOR_STRENGTHS\n"
+     "    from ..identification._model._order import FRICTION_TERMS\n",
+     "identify's help reads a word from the library (which imports JAX)", STARTUP, None),
+    ("__init__.py", "from ._version import __version__ as __version__\n",
+     "from ._version import __version__ as __version__\nfrom . import optim as optim\n",
+     "the package root imports a namespace eagerly", STARTUP, None),
+    ("cli/_vocabulary.py", '"SEDSABSO", "BSO", "LDWPSO")', '"SEDSABSO", "BSO")',
+     "a word the library takes missing from the command's", STARTUP, None),
+    ("_lazy.py", "found[name] = ((where + alias.name, None) if line.module is None\n"
+     "                               else (where, alias.name))",
+     "found[name] = (where, alias.name)",
+     "a lazy namespace reads `from . import a` as a name of the package", STARTUP, None),
+    ("dynamics/_urdf.py", "    if _PARSER not in sys.modules:",
+     "    import pytorch_kinematics  # noqa: F401\n    if _PARSER not in sys.modules:",
+     "reading a URDF imports torch", STARTUP, None),
+    ("identification/_work.py", "    if k:\n        seconds += (SEARCH",
+     "    if False:\n        seconds += (SEARCH",
+     "a fit that searches weighs as a least-squares fit in the progress", USABILITY, None),
+    ("identification/_default/_select_and_identify.py",
+     '    stages.step("fit on all the data", final, evaluation)',
+     '    stages.step("fit on all the data", 0.0, evaluation)',
+     "the fit on all the data not counted in the progress", USABILITY, None),
+    ("cli/_common.py", "        start, done0 = self.first\n",
+     "        start, done0 = self.start, 0.0\n",
+     "the progress's pace counts what came before the first step", USABILITY, None),
+    ("cli/_main.py", "then=write_seconds(settings), every=0)",
+     "then=write_seconds(settings), every=1.0)",
+     "reproduce writes no line but its last off a terminal", REPRODUCE, None),
 ]
 
 

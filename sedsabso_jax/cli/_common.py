@@ -1,16 +1,21 @@
 """What the subcommands share: their help's layout (argument groups, an epilog of examples
-and exit statuses), argument types that say what they expected, the progress bar, and the
-check that outputs can be written before a long run."""
+and exit statuses), argument types that say what they expected, the progress (a bar on a
+terminal, lines elsewhere), and the checks, before JAX is imported, that the files named
+can be read and the outputs written."""
 
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
+import tempfile
+import time
 from collections.abc import Callable, Sequence
-from typing import Any, Self, TextIO
+from typing import TYPE_CHECKING, Any, Self, TextIO
 
-from .._output import PathLike
+if TYPE_CHECKING:
+    from .._output import PathLike
 
 #: The exit statuses, as the help states them.
 EXIT_STATUS = ("exit status: 0 done; 1 a failure while running (solver, out of memory, an "
@@ -68,12 +73,15 @@ class Progress:
     when it is not a terminal; a new ``total`` starts a new bar. Close it (or use it as a
     context manager) when the work ends."""
 
+    #: tqdm's ``bar_format`` (None: tqdm's own, with the count of ``unit``).
+    bar_format: str | None = None
+
     def __init__(self, what: str, stream: TextIO | None = None, unit: str = "fit"):
         self.what, self.unit = what, unit
         self.stream = sys.stderr if stream is None else stream
         self.bar: Any = None
 
-    def __call__(self, label: str, done: int, total: int) -> None:
+    def __call__(self, label: str, done: float, total: float) -> None:
         from tqdm import tqdm
 
         if self.bar is None or self.bar.total != total:
@@ -81,7 +89,7 @@ class Progress:
             # initial: work done before (compare's finished problems) sets no pace
             self.bar = tqdm(total=total, initial=done, desc=self.what, unit=self.unit,
                             postfix=label, file=self.stream, disable=None,
-                            dynamic_ncols=True, leave=False)
+                            dynamic_ncols=True, leave=False, bar_format=self.bar_format)
         self.bar.set_postfix_str(label, refresh=False)
         self.bar.update(done - self.bar.n)
 
@@ -95,6 +103,71 @@ class Progress:
 
     def __exit__(self, *_: object) -> None:
         self.close()
+
+
+#: Where the stream is not a terminal, :class:`LineProgress` writes a line each time this
+#: share of the work is done, with the time left once this share has set the pace.
+LINE_EVERY, PACE_SHARE = 0.1, 0.05
+
+
+def duration(seconds: float) -> str:
+    """``<1 s``, ``45 s`` under two minutes, else ``3.2 min``."""
+    if seconds < 0.5:
+        return "<1 s"
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.1f} min"
+
+
+class LineProgress(Progress):
+    """``progress(label, done, total)`` of a long call whose ``done`` and ``total`` are
+    work (estimated seconds, not a count), followed by ``then`` estimated seconds of the
+    command's own (writing the results; :meth:`finish` when done). On a terminal a bar of
+    the share done; elsewhere (a log file, a pipe, CI) a line each time another ``every``
+    of the work is done (0: at every call) and at its end, with the seconds so far and the
+    time left at the pace so far. The pace is measured from the first call, once
+    :data:`PACE_SHARE` of the work is done since: what comes before it (imports,
+    compilation, the first regressor) is not the pace of the rest, nor is one small step.
+    ``total`` may change between calls (the work ahead estimated again)."""
+
+    bar_format = "{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}, {postfix}"
+
+    def __init__(self, what: str, stream: TextIO | None = None, *, then: float = 0.0,
+                 every: float = LINE_EVERY, clock: Callable[[], float] = time.perf_counter):
+        super().__init__(what, stream, unit="s")
+        self.then, self.every, self.clock, self.start = then, every, clock, clock()
+        self.first: tuple[float, float] | None = None
+        self.shown, self.total = -1, then  # the shares (in steps of every) shown so far
+
+    def __call__(self, label: str, done: float, total: float) -> None:
+        now, self.total = self.clock(), total + self.then
+        if self.first is None:
+            self.first = (now, done)
+        if self.stream.isatty():
+            if self.bar is not None:
+                self.bar.total = self.total  # a revised estimate: the same bar
+            super().__call__(label, done, self.total)
+            return
+        share = min(done / self.total, 1.0) if self.total > 0 else 1.0
+        step = math.floor(share / self.every + 1e-9) if self.every > 0 else self.shown + 1
+        if share < 1.0 and step <= self.shown:
+            return
+        self.shown = step
+        start, done0 = self.first
+        left = None
+        if share < 1.0 and done - done0 >= PACE_SHARE * self.total and now > start:
+            left = (now - start) / (done - done0) * (self.total - done)
+        print(self.line(share, now - self.start, left, label), file=self.stream, flush=True)
+
+    def line(self, share: float, elapsed: float, left: float | None, label: str) -> str:
+        """One line: the share of the work done (rounded down), the seconds so far, the
+        time left."""
+        ahead = "" if left is None else f", {'' if left < 0.5 else '~'}{duration(left)} left"
+        return f"{self.what}: {math.floor(100 * share):3d}%, {duration(elapsed)}{ahead}: {label}"
+
+    def finish(self, label: str) -> None:
+        """The command's own work done: the last line (off a terminal)."""
+        if not self.stream.isatty():
+            self.then = 0.0
+            self(label, self.total, self.total)
 
 
 def number(kind: type[int] | type[float], minimum: float, strict: bool
@@ -149,6 +222,41 @@ def check_writable(out_dir: PathLike | None, json_path: PathLike | None,
     for flag, path in (("--json", json_path), ("--urdf-out", urdf_path)):
         if path is not None and os.path.isdir(path):
             raise ValueError(f"{flag} {path!r} is a directory; expected a file path")
+
+
+#: The flags naming files a command reads, by their destination: each file must exist and
+#: be readable before the command starts (:func:`check_files`).
+INPUT_FLAGS = {"data": "--data", "validate": "--validate", "loaded": "--loaded"}
+
+
+def check_files(args: argparse.Namespace) -> None:
+    """Fail at once, before JAX or the library is imported, when a file a flag names
+    (:data:`INPUT_FLAGS`, a ``--robot`` URDF, a ``--drive-gains`` JSON file) cannot be
+    read or an output (``--out``, ``--json``, ``--urdf-out``) cannot be written."""
+    for dest, flag in INPUT_FLAGS.items():
+        paths = getattr(args, dest, None)
+        for path in [paths] if isinstance(paths, str) else paths or ():
+            _readable(flag, path, "file")
+    robot = getattr(args, "robot", None)
+    if isinstance(robot, str) and robot.lower().endswith(".urdf"):
+        if not os.path.isfile(robot):  # the words of the robot's loader
+            raise ValueError(f"--robot: no such file {robot!r}")
+        _readable("--robot", robot, "URDF file")
+    gains = getattr(args, "drive_gains", None)
+    if isinstance(gains, str) and gains.lower().endswith(".json"):
+        _readable("--drive-gains", gains, "JSON file ('identify-gains --json' writes it)")
+    json_path = getattr(args, "json", None)
+    check_writable(getattr(args, "out", None), None if json_path == "-" else json_path,
+                   getattr(args, "urdf_out", None))
+
+
+def _readable(flag: str, path: str, expected: str) -> None:
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"{flag} {path}: no such file")
+    if os.path.isdir(path):
+        raise IsADirectoryError(f"{flag} {path}: a directory; expected a {expected}")
+    if not os.access(path, os.R_OK):
+        raise PermissionError(f"{flag} {path}: the file cannot be read (permissions)")
 
 
 #: The robots ``--robot`` knows by name (else a URDF file).

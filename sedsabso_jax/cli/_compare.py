@@ -21,13 +21,13 @@ class CompareProgress(Progress):
     def __init__(self, stream: TextIO | None = None):
         super().__init__("compare", stream, unit="task")
 
-    def __call__(self, label: str, done: int, total: int, elapsed: float = 0.0) -> None:
+    def __call__(self, label: str, done: float, total: float, elapsed: float = 0.0) -> None:
         from ..compare._run import estimated_seconds
 
         if self.stream.isatty():
             super().__call__(label, done, total)
             return
-        left = estimated_seconds(done, total, elapsed)
+        left = estimated_seconds(int(done), int(total), elapsed)  # counts of tasks
         eta = "" if left != left else f" ~{left / 60:.0f} min left"
         print(f"compare: {done}/{total} {elapsed:6.0f} s {label}{eta}", file=self.stream,
               flush=True)
@@ -88,11 +88,12 @@ def report_settings(settings) -> dict:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The ``compare`` subcommand's flags (its defaults are ``compare``'s own)."""
-    from ..compare._bbob import DEFAULT_INSTANCES, DIMENSIONS, FUNCTIONS, ranges
-    from ..compare._run import DEFAULT_ALGORITHMS, DEFAULT_BUDGET
+    from ._vocabulary import BBOB_DIMENSIONS, BBOB_FUNCTIONS, BBOB_INSTANCES
+    from ._vocabulary import COMPARE_ALGORITHMS as DEFAULT_ALGORITHMS
+    from ._vocabulary import COMPARE_BUDGET as DEFAULT_BUDGET
 
-    functions, instances = ranges(range(1, len(FUNCTIONS) + 1)), ranges(DEFAULT_INSTANCES)
-    dimensions = ",".join(map(str, DIMENSIONS))
+    functions, instances = BBOB_FUNCTIONS, BBOB_INSTANCES
+    dimensions = ",".join(map(str, BBOB_DIMENSIONS))
 
     cp = subcommand(
         sub, "compare",

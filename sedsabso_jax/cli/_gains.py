@@ -83,9 +83,7 @@ def run(args: argparse.Namespace) -> None:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The ``identify-gains`` subcommand's flags, in groups."""
-    from ..identification._gains._identify_gains import DEFAULT_METHOD
-    from ..identification._gains._solvers import GAIN_METHODS
-    from ..identification._model._order import FRICTION_TERMS
+    from ._vocabulary import DEFAULT_GAIN_METHOD, FRICTION_TERMS, GAIN_METHODS
 
     pp = subcommand(
         sub, "identify-gains",
@@ -127,8 +125,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     model.add_argument("--offset-per-recording", action="store_true",
                        help="one torque offset per joint and file")
     est = pp.add_argument_group("estimator")
-    est.add_argument("--method", choices=tuple(GAIN_METHODS), default=DEFAULT_METHOD.name,
-                     help=f"how the equations are solved ({DEFAULT_METHOD.name}: the maximum "
+    est.add_argument("--method", choices=GAIN_METHODS, default=DEFAULT_GAIN_METHOD,
+                     help=f"how the equations are solved ({DEFAULT_GAIN_METHOD}: the maximum "
                      f"likelihood for noise in the currents; ordinary least squares is "
                      f"biased by it)")
     out = pp.add_argument_group("outputs", "written atomically: a failed run leaves none")

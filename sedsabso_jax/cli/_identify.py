@@ -7,11 +7,10 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import time
-from typing import Any, TextIO
+from typing import Any
 
 from ._common import (
-    Progress,
+    LineProgress,
     add_run_options,
     check_writable,
     non_negative_int,
@@ -38,31 +37,15 @@ from ._loading import (
 #: ``--method``, ``--weights`` and ``--friction`` left to validation.
 AUTO = "auto"
 WEIGHTS = (AUTO, "residual", "limits", "equal")
-#: Where stderr is not a terminal, a line each time this fraction of the fits is done.
-LINE_EVERY = 0.1
+#: The estimated seconds (as the library's, sedsabso_jax/identification/_work.py) of
+#: writing the report: its text and JSON, and with --out matplotlib's import and each
+#: figure.
+WRITE_SECONDS, PYPLOT_SECONDS, FIGURE_SECONDS = 0.3, 1.5, 1.2
 
 
-class IdentifyProgress(Progress):
-    """A bar of fits on a terminal; elsewhere (a log file) a line each time another
-    :data:`LINE_EVERY` of the fits is done, with the time so far and the time left at
-    that pace."""
-
-    def __init__(self, stream: TextIO | None = None):
-        super().__init__("identify", stream)
-        self.start, self.shown = time.perf_counter(), 0
-
-    def __call__(self, label: str, done: int, total: int) -> None:
-        if self.stream.isatty():
-            super().__call__(label, done, total)
-            return
-        step = max(1, math.ceil(LINE_EVERY * total))
-        if done < total and done < self.shown + step:
-            return
-        self.shown = done
-        elapsed = time.perf_counter() - self.start
-        left = elapsed * (total - done) / max(done, 1)
-        print(f"identify: {done}/{total} fits, {elapsed:.0f} s, ~{left / 60:.1f} min left: "
-              f"{label}", file=self.stream, flush=True)
+def writing_seconds(figures: int) -> float:
+    """The estimated seconds of writing the report with ``figures`` figures."""
+    return WRITE_SECONDS + (PYPLOT_SECONDS + FIGURE_SECONDS * figures if figures else 0.0)
 
 
 def _prior_strength(text: str):
@@ -159,7 +142,9 @@ def run(args: argparse.Namespace) -> None:
                          f"(a URDF's <limit effort=...>)")
     models = candidate_models(robot, frictions, transmission=transmission,
                               recordings=len(data) if args.offset_per_recording else 1)
-    with IdentifyProgress() as progress:  # validation fits, conic solves
+    # every fit, the evaluation, the files
+    figures = 0 if args.out is None else 1 + len(validate)
+    with LineProgress("identify", then=writing_seconds(figures)) as progress:
         report = select_and_identify(robot, data, held_out=held_out, limits=limits,
                                      models=models, estimators=estimators,
                                      validation=choice.validation, physical=physical,
@@ -174,17 +159,16 @@ def run(args: argparse.Namespace) -> None:
     with urdf_source(args.robot) as source:
         written = report.write(settings, args.out, args.json, args.urdf_out,
                                urdf_source=source)
-    print(report.text())
+    text = report.text()
+    progress.finish("written" if written else "done")
+    print(text)
     if written:
         print("written: " + ", ".join(written))
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The ``identify`` subcommand's flags, in groups."""
-    from ..identification._estimators._estimator import Estimator
-    from ..identification._model._candidates import FRICTION_CANDIDATES
-    from ..identification._model._order import FRICTION_TERMS, friction_text
-    from ..identification._validation._selection import PRIOR_STRENGTHS
+    from ._vocabulary import ESTIMATORS, FRICTION_CANDIDATES, FRICTION_TERMS, PRIOR_STRENGTHS
 
     ip = subcommand(
         sub, "identify",
@@ -207,7 +191,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     add_loading(inp)
     add_motors(ip, "--data and --validate")
     model = ip.add_argument_group("torque model")
-    candidates = ", ".join(friction_text(terms) for terms in FRICTION_CANDIDATES)
+    candidates = ", ".join(FRICTION_CANDIDATES)
     model.add_argument("--friction", metavar="TERMS", default=AUTO,
                        help=f"terms of {', '.join(FRICTION_TERMS)} joined by +, each "
                        "TERM or TERM:OPTION (smooth:fit and stribeck:fit search each "
@@ -220,7 +204,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        action="store_false",
                        help="with --friction auto, do not add friction at rest to the choice")
     est = ip.add_argument_group("estimator")
-    est.add_argument("--method", choices=(AUTO, *Estimator.registered()), default=AUTO,
+    est.add_argument("--method", choices=(AUTO, *ESTIMATORS), default=AUTO,
                      help="estimator; auto (default): OLS or WLS, chosen by validation")
     est.add_argument("--weights", choices=WEIGHTS, default=AUTO,
                      help="row weights per joint: residual (Gautier's two-step WLS), limits "

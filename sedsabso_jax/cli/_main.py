@@ -38,8 +38,9 @@ from . import _payload as payload_command
 from ._common import (
     EXIT_STATUS,
     HelpFormatter,
-    Progress,
+    LineProgress,
     add_run_options,
+    check_files,
     check_writable,
     non_negative_float,
     non_negative_int,
@@ -56,6 +57,7 @@ USAGE_ERRORS = (ValueError, TypeError, FileNotFoundError, IsADirectoryError,
 def _cmd_reproduce(args) -> None:
     from ..reproduce import _experiment as experiment
     from ..reproduce import _report as report
+    from ..reproduce._work import write_seconds
 
     settings = experiment.Settings(runs=args.runs, iterations=args.iterations,
                                    samples=args.samples, noise=args.noise,
@@ -63,9 +65,11 @@ def _cmd_reproduce(args) -> None:
                                    design_iterations=args.design_iterations)
     settings.check()
     check_writable(args.out, args.json)
-    with Progress("reproduce", unit="step") as progress:
+    # a line at each step (a swarm's runs are one call)
+    with LineProgress("reproduce", then=write_seconds(settings), every=0) as progress:
         exp = experiment.run(settings, progress=progress)
-    written = report.write_outputs(exp, args.out, args.json)
+        written = report.write_outputs(exp, args.out, args.json)
+        progress.finish("written")
     print(report.table4(exp.results))
     print("written: " + ", ".join(written))
 
@@ -155,6 +159,18 @@ def _enable_compilation_cache() -> str | None:
     return where
 
 
+def _start_jax(command: str) -> None:
+    """Import JAX and turn its 64-bit mode on, before any JAX work: the command is an
+    application (the library never turns it on, sedsabso_jax/_x64.py); the commands that
+    compile much keep what they compile (:func:`_enable_compilation_cache`)."""
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    if command in ("reproduce", "identify", "identify-payload", "identify-gains",
+                   "compare"):
+        _enable_compilation_cache()
+
+
 def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
     """``warnings.showwarning`` for the command: one short line on stderr."""
     text = " ".join(str(message).split())
@@ -171,21 +187,17 @@ def main(argv: list[str] | None = None) -> int:
     """Run the command; returns the exit status: 0 done, 1 a failure while running
     (RuntimeError, e.g. a solver's or XLA's out of memory; MemoryError; anything
     unexpected), 2 a usage error or bad input (:data:`USAGE_ERRORS`; argparse exits with
-    2 itself), 130 interrupted. Each error is one line on stderr; ``--debug`` raises it."""
-    import jax
-
-    # an application: the command turns JAX's 64-bit mode on for itself (the library never
-    # does, sedsabso_jax/_x64.py), before any JAX work
-    jax.config.update("jax_enable_x64", True)
+    2 itself), 130 interrupted. Each error is one line on stderr; ``--debug`` raises it.
+    Parsing, the help and the checks of the files named (:func:`~._common.check_files`)
+    import neither JAX nor the library: they answer at once."""
     parser = build_parser()
     args = config.parse_args(parser, sys.argv[1:] if argv is None else argv)
     if args.command is None:
         parser.print_help()
         return 0
-    if args.command in ("reproduce", "identify", "identify-payload", "identify-gains",
-                        "compare"):
-        _enable_compilation_cache()
     try:
+        check_files(args)  # before JAX is imported: a missing file is said at once
+        _start_jax(args.command)
         with warnings.catch_warnings():
             warnings.simplefilter("default", UserWarning)
             if not args.debug:

@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> None:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """The ``identify-payload`` subcommand's flags, in groups."""
-    from ..identification._model._order import FRICTION_TERMS
+    from ._vocabulary import FRICTION_TERMS
 
     pp = subcommand(
         sub, "identify-payload",

@@ -11,8 +11,11 @@ joint's Coulomb and viscous friction.
 
 from __future__ import annotations
 
+import importlib
+import importlib.util
 import os
 import re
+import sys
 import warnings
 from collections import defaultdict
 from collections.abc import Sequence
@@ -61,9 +64,38 @@ def read_checked(path) -> str:
     return etree.tostring(root, encoding="unicode")
 
 
+#: The name pytorch-kinematics' URDF parser is imported under (:func:`_parser`).
+_PARSER = "_sedsabso_jax_urdf_parser_py"
+
+
+def _parser() -> tuple[Any, Any]:
+    """pytorch-kinematics' URDF parser (pure Python: its ``urdf`` and ``core`` modules),
+    imported without the package's ``__init__``, which imports torch (seconds to import,
+    and more to exit, in every command that reads a URDF)."""
+    if _PARSER not in sys.modules:
+        found = importlib.util.find_spec("pytorch_kinematics")  # finds, runs nothing
+        where = os.path.join(list(found.submodule_search_locations or [])[0],
+                             "urdf_parser_py") if found is not None else ""
+        spec = importlib.util.spec_from_file_location(
+            _PARSER, os.path.join(where, "__init__.py"), submodule_search_locations=[where])
+        if spec is None or spec.loader is None or not os.path.isdir(where):
+            from pytorch_kinematics.urdf_parser_py import urdf
+            from pytorch_kinematics.urdf_parser_py.xml_reflection import core
+
+            return urdf, core
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[_PARSER] = module
+        try:
+            spec.loader.exec_module(module)
+        except BaseException:
+            del sys.modules[_PARSER]
+            raise
+    return (importlib.import_module(f"{_PARSER}.urdf"),
+            importlib.import_module(f"{_PARSER}.xml_reflection.core"))
+
+
 def _parse(text: str, path: str):
-    from pytorch_kinematics.urdf_parser_py import urdf as pk_urdf
-    from pytorch_kinematics.urdf_parser_py.xml_reflection import core
+    pk_urdf, core = _parser()
 
     messages: list[str] = []
     previous = core.on_error

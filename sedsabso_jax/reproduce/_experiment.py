@@ -32,6 +32,7 @@ single run has its own executable.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from collections.abc import Callable
 
 import jax
@@ -53,6 +54,7 @@ from ..optim._box import box_around
 from ..optim._driver import minimise, time_one_of_many
 from ..optim._fitness import L1Residual
 from ..optim._registry import SWARMS, paper_solver
+from ._work import step_seconds
 
 SCENARIOS = ("paper", "prior")
 BASELINES = ("OLS", "LM", "L1-LP")
@@ -169,18 +171,20 @@ def build_problem(settings: Settings = Settings(),
                                  upper)
 
 
-def _progress_noop(label: str, done: int, total: int) -> None:
+def _progress_noop(label: str, done: float, total: float) -> None:
     pass
 
 
-def run(settings: Settings = Settings(), progress: Callable[[str, int, int], None] | None = None
-        ) -> Experiment:
+def run(settings: Settings = Settings(),
+        progress: Callable[[str, float, float], None] | None = None) -> Experiment:
     """Run the experiment; ``progress(label, done, total)`` is called before each step
-    (``done`` steps finished) and once at the end (``done == total``)."""
+    and once at the end (``done == total``), ``done`` and ``total`` the estimated seconds
+    of the steps finished and of all (:func:`~._work.step_seconds`, known before)."""
     settings.check()
     progress = progress or _progress_noop
-    total = 3 + len(SWARMS) + len(BASELINES)
-    step = iter(range(total))
+    seconds = step_seconds(settings, tuple(SWARMS), BASELINES)
+    total = sum(seconds)
+    step = iter(itertools.accumulate([0.0, *seconds]))
     dtype = jnp.float32 if settings.dtype == "float32" else jnp.float64
     key = jax.random.key(settings.seed)
 

@@ -33,28 +33,45 @@ from .._validation._selection import (
     select_model,
 )
 from .._validation._splits import Validation
+from .._work import evaluate_seconds, fit_seconds
 from ._choice import Choice, DefaultValidation
 from ._held_out import HeldOutData, named_recordings
 from ._report import IdentificationReport
 
 
 class _Stages:
-    """One ``progress(label, done, total)`` over the stages of a call: each stage reports
-    its own fits (1..its total) and is told how many fits the stages after it make."""
+    """One ``progress(label, done, total)`` over the stages of a call, in estimated
+    seconds (:mod:`.._work`): each stage reports its own work and is told the work of the
+    stages after it."""
 
     def __init__(self, progress: ProgressCallback | None):
-        self.progress, self.done = progress, 0
+        self.progress, self.done = progress, 0.0
 
-    def stage(self, later: int) -> ProgressCallback | None:
+    def stage(self, later: float) -> ProgressCallback | None:
         if self.progress is None:
             return None
         report, start = self.progress, self.done
 
-        def step(label: str, done: int, total: int) -> None:
+        def step(label: str, done: float, total: float) -> None:
             self.done = start + done
             report(label, self.done, start + total + later)
 
         return step
+
+    def step(self, label: str, seconds: float, later: float) -> None:
+        """A stage of one step of ``seconds``, done, before ``later`` seconds more."""
+        if self.progress is not None:
+            self.done += seconds
+            self.progress(label, self.done, self.done + later)
+
+
+def _work_after(estimators: Iterable[Estimator], models: Iterable[TorqueModel], rows: int,
+                held_rows: int, prior_fits: int) -> float:
+    """The estimated seconds after the model choice, for the costliest of ``estimators``
+    and ``models``: ``prior_fits`` fits of the prior's validation, the fit on all
+    ``rows`` and the report's evaluation (with ``held_rows``)."""
+    return max(prior_fits * fit_seconds(e, m, rows) + fit_seconds(e, m, rows, final=True)
+               + evaluate_seconds(m, rows + held_rows) for e in estimators for m in models)
 
 
 def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | None = None,
@@ -101,9 +118,12 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
     Measurements, or a mapping name -> Measurements (each named in the report by its
     key, else by its ``source``, a loaded file's path); ``limits``: per-joint torque
     limits (the NRMS measure and the 1/limit weighting; candidates weighting by them are
-    skipped without); ``progress(label, done, total)``: called after each fit, ``done`` running
-    1..``total`` over the whole call (None: quiet). The rules between the options are
-    :class:`Choice`'s. Data that cannot give an answer are refused before the first fit
+    skipped without); ``progress(label, done, total)``: called after each fit and after
+    the evaluation, ``done`` and ``total`` the estimated seconds of the work done and of
+    all (each fit's cost known before it runs, :mod:`~sedsabso_jax.identification._work`;
+    ``total`` revised as the choices are made), ``done == total`` at the end (None:
+    quiet). The rules between the options are :class:`Choice`'s. Data that cannot give
+    an answer are refused before the first fit
     (:func:`~.._data_checks.check_selection_data`: too few samples for the largest
     model, no motion, a poor excitation, torques 10 times the ``limits``, a validation
     split too small to fit). Returns the :class:`~._report.IdentificationReport` the command
@@ -125,11 +145,14 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
                          and choice.prior_strength > 0)
     kept = (validation.kept if isinstance(validation, DefaultValidation)
             and len(models) > 1 else None)
-    # the fits after the model choice, for the progress: the prior's validation, the fit
-    later = 1 + (len(PRIOR_STRENGTHS) * len(chosen_by.splits(recordings))
-                 if progress is not None and chosen_by is not None
-                 and choice.prior_strength == "cv"
-                 else 0)
+    # the work after the model choice, for the progress: the prior's validation, the fit
+    # on all the data, the evaluation; of the costliest candidate until one is chosen
+    rows, held_rows = sum(r.q.size for r in recordings), sum(r.q.size for r in held.values())
+    prior_fits = (len(PRIOR_STRENGTHS) * len(chosen_by.splits(recordings))
+                  if progress is not None and chosen_by is not None
+                  and choice.prior_strength == "cv" else 0)
+    later = _work_after(estimators, models + (() if kept is None else kept.models(models[-1])),
+                        rows, held_rows, prior_fits) if progress is not None else 0.0
     stages = _Stages(progress)
     selection = cv = None
     if chosen_by is None:
@@ -140,16 +163,23 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
                                  progress=stages.stage(later))
         estimator, model = selection.estimator, selection.model
         cv = selection.cross_validation
+        stages.step(f"{'chosen' if len(selection.candidates) > 1 else 'validated'}: "
+                    f"{estimator.name}, {model.friction}", 0.0,
+                    _work_after((estimator,), (model,), rows, held_rows, prior_fits))
     prior_selection = None
+    final = fit_seconds(estimator, model, rows, final=True)
+    evaluation = evaluate_seconds(model, rows + held_rows)
     if choice.physical is True and choice.prior_strength == "cv":
         prior_selection = choose_prior_strength(robot, recordings, estimator, model,
                                                 strengths=PRIOR_STRENGTHS,
                                                 validation=chosen_by,  # type: ignore[arg-type]
-                                                limits=limits, progress=stages.stage(1))
+                                                limits=limits,
+                                                progress=stages.stage(final + evaluation))
         estimator, cv = prior_selection.estimator, prior_selection.cross_validation
     ident = identified(robot, recordings, estimator, model, limits)[0]  # data checked above
-    if progress is not None:
-        progress("fit on all the data", stages.done + 1, stages.done + 1)
-    return IdentificationReport.evaluate(ident, recordings, held or None, limits,
-                                         cross_validation=cv, selection=selection,
-                                         prior_selection=prior_selection)
+    stages.step("fit on all the data", final, evaluation)
+    report = IdentificationReport.evaluate(ident, recordings, held or None, limits,
+                                           cross_validation=cv, selection=selection,
+                                           prior_selection=prior_selection)
+    stages.step("evaluated" + (" on the held-out data" if held else ""), evaluation, 0.0)
+    return report

@@ -31,8 +31,9 @@ Sigma: TypeAlias = str | Sequence[float] | Float[ArrayLike, " n"] | None
 #: Per-joint torque limits (N m), or None where they are unknown.
 Limits: TypeAlias = Sequence[float] | Float[ArrayLike, " n"] | None
 #: ``progress(label, done, total)``: called after each fit of a long call (its return value
-#: is ignored); ``done`` runs 1..``total``.
-ProgressCallback: TypeAlias = Callable[[str, int, int], object]
+#: is ignored); ``done`` and ``total``: the work done and in all, in estimated seconds
+#: (sedsabso_jax/identification/_work.py), ``done`` growing to ``total``.
+ProgressCallback: TypeAlias = Callable[[str, float, float], object]
 
 
 def per_joint(name: str, value: Sigma, n: int, allow_none: bool = True

@@ -62,11 +62,13 @@ from .._model._checks import model_of
 from .._model._torque_model import TorqueModel
 from .._options import one_or_more
 from .._recordings import Data, recordings_of, stacked
+from .._work import parts
 from ._cross_validation import TIE_FRACTION as TIE_FRACTION
 from ._cross_validation import CrossValidation as CrossValidation
 from ._cross_validation import cross_validation_of, not_worse
 from ._kept_terms import KeptTerms
 from ._phase import DEFAULT_FOLDS as DEFAULT_FOLDS
+from ._progress import Fits, grid_seconds, kept_seconds, split_seconds, train_rows
 from ._splits import PhaseFolds, Splits, Validation
 
 #: The candidate estimators of :func:`select_model` (their weightings), simplest first.
@@ -74,26 +76,6 @@ ESTIMATOR_CANDIDATES = (OLS(), WLS("residual"), WLS("limits"))
 #: The candidate pulls of a physically consistent fit toward the a-priori parameters
 #: (:func:`choose_prior_strength`; multiples of the data term's mean curvature), none first.
 PRIOR_STRENGTHS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)
-
-
-class _Fits:
-    """Counts fits for ``progress(label, done, total)`` (None: counts nothing)."""
-
-    def __init__(self, progress: ProgressCallback | None, total: int):
-        self.progress, self.total, self.done = progress, total, 0
-
-    def after(self, label: str) -> Callable[[], None] | None:
-        """The ``on_fit`` of :func:`~._cross_validation.cross_validation_of` for fits
-        labelled so."""
-        if self.progress is None:
-            return None
-        report = self.progress
-
-        def fitted() -> None:
-            self.done += 1
-            report(label, self.done, self.total)
-
-        return fitted
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -133,15 +115,17 @@ def cross_validate(robot: Robot, data: Data, estimator: Estimator = OLS(),
     split of ``validation`` (a :class:`~._splits.Validation`; default
     :data:`DEFAULT_FOLDS` phase folds) and predict it. ``data``: one recording or several
     (stacked); ``model`` and ``limits`` as in :func:`~sedsabso_jax.identify`;
-    ``progress(label, done, total)`` is called after each split's fit (``total``: the
-    splits)."""
+    ``progress(label, done, total)`` is called after each split's fit (``done`` and
+    ``total``: the estimated seconds of the fits done and of all, :mod:`.._work`)."""
     prepared = Prepared.of(robot, data, validation)
     model = model_of(robot, model)
     limits = per_joint("limits", limits, robot.n_joints)
     checked_estimator(estimator).check(model, limits)
-    fits = _Fits(progress, len(prepared.splits))
+    each = split_seconds(train_rows(prepared.samples, prepared.splits), estimator, model,
+                         parts(estimator, model))
+    fits = Fits(progress, sum(each))
     return prepared.validate(estimator, model, limits,
-                             fits.after(f"{estimator.name}, {model.friction}"))
+                             fits.after(f"{estimator.name}, {model.friction}", each))
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -237,8 +221,9 @@ def select_model(robot: Robot, data: Data, *,
     :attr:`~._cross_validation.CrossValidation.part_scores`). ``kept``: terms added to
     the choice, with its estimator, and kept unless they validate worse
     (:class:`~._kept_terms.KeptTerms`; their rows come last, ``"kept_terms": True`` in
-    their settings). ``progress(label, done, total)`` is called after each fit
-    (``total``: candidates x splits, and the kept terms' after the choice)."""
+    their settings). ``progress(label, done, total)`` is called after each fit, ``done``
+    and ``total`` the estimated seconds of the fits done and of all (:mod:`.._work`;
+    the kept terms' estimated for the costliest candidate until the choice is made)."""
     estimators = ESTIMATOR_CANDIDATES if estimators is None else one_or_more(estimators,
                                                                              Estimator)
     limits = per_joint("limits", limits, robot.n_joints)
@@ -249,19 +234,20 @@ def select_model(robot: Robot, data: Data, *,
         model_of(robot, m) for m in one_or_more(models, TorqueModel))
     if not models or not estimators:
         raise ValueError("select_model needs at least one torque model and one estimator")
-    fits = _Fits(progress, (len(models) * len(estimators)
-                            + (0 if kept is None else len(kept.alternatives)))
-                 * len(prepared.splits))
+    grid = [(estimator, model) for model in models for estimator in estimators]
+    rows = train_rows(prepared.samples, prepared.splits)
+    each, seen = grid_seconds(rows, grid), set().union(*(parts(e, m) for e, m in grid))
+    fits = Fits(progress, sum(map(sum, each)) + (0.0 if kept is None else max(
+        sum(map(sum, kept_seconds(rows, kept, e, models[-1], seen))) for e in estimators)))
     tried, options = [], []
-    for model in models:
-        for estimator in estimators:
-            checked_estimator(estimator).check(model, limits)
-            settings = {"method": estimator.name, "sigma": estimator.sigma,
-                        "physical": estimator.physical, "friction": model.friction}
-            on_fit = fits.after(f"{estimator.name}{' physical' * estimator.physical}, "
-                                f"{model.friction}")
-            tried.append((settings, prepared.validate(estimator, model, limits, on_fit)))
-            options.append((estimator, model))
+    for (estimator, model), seconds in zip(grid, each):
+        checked_estimator(estimator).check(model, limits)
+        settings = {"method": estimator.name, "sigma": estimator.sigma,
+                    "physical": estimator.physical, "friction": model.friction}
+        on_fit = fits.after(f"{estimator.name}{' physical' * estimator.physical}, "
+                            f"{model.friction}", seconds)
+        tried.append((settings, prepared.validate(estimator, model, limits, on_fit)))
+        options.append((estimator, model))
     index = simplest_not_worse([cv for _, cv in tried], [e.physical for e, _ in options])
     if kept is not None:
         index = _with_kept(kept, index, tried, options, prepared, limits, fits)
@@ -272,15 +258,19 @@ def select_model(robot: Robot, data: Data, *,
 
 
 def _with_kept(kept: KeptTerms, index: int, tried: list, options: list,
-               prepared: Prepared, limits: np.ndarray | None, fits: _Fits) -> int:
+               prepared: Prepared, limits: np.ndarray | None, fits: Fits) -> int:
     """Validate ``kept``'s terms added to candidate ``index`` (appended to ``tried`` and
     ``options``); the index of the candidate kept."""
     estimator, model = options[index]
+    each = kept_seconds(train_rows(prepared.samples, prepared.splits), kept, estimator,
+                        model, set().union(*(parts(e, m) for e, m in options)))
+    fits.total = fits.done + sum(map(sum, each))
     found = []
-    for with_terms in kept.models(model):
+    for with_terms, seconds in zip(kept.models(model), each):
         checked_estimator(estimator).check(with_terms, limits)
         settings = {**tried[index][0], "friction": with_terms.friction, "kept_terms": True}
-        on_fit = fits.after(f"{estimator.name}, {with_terms.friction} (kept unless worse)")
+        on_fit = fits.after(f"{estimator.name}, {with_terms.friction} (kept unless worse)",
+                            seconds)
         tried.append((settings, prepared.validate(estimator, with_terms, limits, on_fit)))
         options.append((estimator, with_terms))
         found.append(len(tried) - 1)
@@ -336,8 +326,8 @@ def choose_prior_strength(robot: Robot, data: Data,
     STRONGEST pull whose split-by-split excess over the lowest error is within one
     standard error is kept (the one-standard-error rule: the most regularised model the
     data cannot tell from the best). The predicted samples are fitted by nothing, chosen
-    by nothing else. ``progress(label, done, total)`` is called after each fit
-    (``total``: strengths x splits)."""
+    by nothing else. ``progress(label, done, total)`` is called after each fit (``done``
+    and ``total``: estimated seconds, as in :func:`cross_validate`)."""
     strengths = tuple(float(v) for v in strengths)
     if not strengths or any(not (np.isfinite(v) and v >= 0) for v in strengths):
         raise ValueError(f"strengths must be numbers >= 0, at least one, got {strengths}")
@@ -347,11 +337,12 @@ def choose_prior_strength(robot: Robot, data: Data,
     limits = per_joint("limits", limits, robot.n_joints)
     estimator.check(model, limits)
     tried, estimators = [], []
-    fits = _Fits(progress, len(strengths) * len(prepared.splits))
+    each = split_seconds(train_rows(prepared.samples, prepared.splits), estimator, model)
+    fits = Fits(progress, sum(each) * len(strengths))
     for v in strengths:
         estimators.append(dataclasses.replace(estimator, prior_strength=v))
         tried.append((v, prepared.validate(estimators[-1], model, limits,
-                                           fits.after(f"prior strength {v:g}"))))
+                                           fits.after(f"prior strength {v:g}", each))))
     best_v, best = min(tried, key=lambda c: c[1].score)
     chosen = max(v for v, cv in tried if not_worse(cv, best))
     return PriorSelection(candidates=tuple(tried), chosen=chosen, best=best_v,
