@@ -97,9 +97,10 @@ def _searched(model: TorqueModel, samples: Samples, weights: np.ndarray
     method = model.searched_by
     searched = method.search(problem, start, lower, upper)
     names = [n for f in found for n in f.names]
-    polished = {} if searched.newton_steps is None else {
-        "newton_steps": searched.newton_steps, "converged": searched.converged,
+    polished: dict = {} if searched.held is None else {
         "held": [n for n, h in zip(names, searched.held) if h]}
+    if searched.newton_steps is not None:
+        polished.update(newton_steps=searched.newton_steps, converged=searched.converged)
     return model.with_nonlinear(np.exp(searched.u)), {
         **method.settings(), "evaluations": searched.evaluations, "loss": searched.loss,
         "seconds": searched.seconds, **polished}
