@@ -103,7 +103,7 @@ CASES = [
     (["identify", "--robot", "kuka_lwr4", "--data", "{data}", "--json", "{data}/r.json"], 2,
      "is not a directory"),
     (["identify", "--robot", "kuka_lwr4", "--data", "{data}", "--json", "/proc/r.json"], 2,
-     "not writable"),
+     "cannot write in directory"),
     (["identify-payload", "--robot", "kuka_lwr4", "--loaded", "none.npz", "--link", "x"], 2,
      "--loaded none.npz: no such file"),
     (["identify", "--robot", "kuka_lwr4", "--data", "{data}", "--drive-gains", "g.json"], 2,
