@@ -235,3 +235,21 @@ def test_modules_and_functions_stay_small():
                 wide.append(f"{path.relative_to(ROOT)}: {node.name}({_parameters(node)})")
     assert not long, f"modules over {MAX_LINES} lines: {long}"
     assert not wide, f"functions over {MAX_PARAMETERS} parameters: {wide}"
+
+
+def test_every_planted_bug_still_applies():
+    """Each of tools/planted_bugs.py's bugs names text that occurs exactly once in its
+    module and test files that exist: a refactor that moves the text would otherwise turn
+    the bug into a silent ``NOT APPLIED`` (two had, after issue 42's merges)."""
+    import importlib.util
+
+    path = ROOT.parent / "tools" / "planted_bugs.py"
+    spec = importlib.util.spec_from_file_location("planted_bugs", path)
+    planted = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(planted)
+    stale = [(number, module, source.count(text))
+             for number, (module, text, *_, tests, _) in enumerate(planted.BUGS, 1)
+             if (source := (ROOT / module).read_text(encoding="utf-8")).count(text) != 1]
+    assert not stale, f"(bug, module, times its text occurs): {stale}"
+    tests = {t for *_, files, _ in planted.BUGS for t in files}
+    assert all((ROOT.parent / t).is_file() for t in tests), tests

@@ -5,7 +5,8 @@ what it found.
 - The coordinate search on losses with ties (a plateau at the minimum, a coordinate the
   loss does not feel) and rounding noise of 1e-14 of the loss (what another processor's
   BLAS kernels change): the same end, to 1e-9, with and without the noise; Newton's
-  method takes it to the minimum (to 1e-7, not to a grid's step).
+  method takes it to the minimum (to 1e-7, not to a grid's step) and does not step
+  along a curvature only the rounding makes.
 - The KUKA LWR4+'s friction at rest searched with OpenBLAS made to use another
   processor's kernels (``OPENBLAS_CORETYPE``), in a second process: the parameters differ
   by less than 1e-3 of their standard deviations (before, the displacements ended 1-5 %
@@ -92,6 +93,37 @@ def test_newton_ends_at_the_minimum_not_a_grid_step():
     assert np.abs(sweeps.u - centre).max() > 1e-5
     np.testing.assert_allclose(polished.u, centre, atol=1e-7)
     assert polished.converged and 1 <= polished.newton_steps <= 5
+
+
+class Slope(eqx.Module):
+    """A bowl in the first coordinate; in the second a slope of 1e-9 of the loss, which
+    no curvature bounds, times rounding noise of 1e-14 of the loss."""
+
+    phase: jax.Array
+
+    def residual(self, u):
+        return jnp.stack([u[0] - 0.5, jnp.sqrt(1.0 + 1e-9 * u[1])])
+
+    def loss(self, u):
+        wobble = jnp.sin(1e7 * (u[0] + 3.0 * u[1]) + self.phase)
+        return jnp.mean(self.residual(u) ** 2) * (1.0 + 1e-14 * wobble)
+
+
+def test_newton_steps_along_no_curvature_the_rounding_makes():
+    """Along the slope the finite differences' curvature is the noise's (about 1e-8 of
+    the loss, below the floor of what the rounding can tell from 0): Newton's method does
+    not step there, so the end is the same for every draw of the noise (stepping along it,
+    the slope over that curvature sent the second coordinate anywhere from 0.02 to the
+    bound at 4)."""
+    from sedsabso_jax.identification._search._newton import polish
+
+    ends = []
+    for phase in np.linspace(0.0, 2 * np.pi, 6, endpoint=False):
+        problem, u = Slope(jnp.asarray(phase)), np.array([0.6, 0.0])
+        ends.append(polish(problem, u, float(problem.loss(jnp.asarray(u))), LOWER[:2],
+                           UPPER[:2], rtol=1e-10, max_steps=10).u)
+    np.testing.assert_allclose(np.array(ends)[:, 0], 0.5, atol=1e-7)
+    assert np.abs(np.array(ends)[:, 1]).max() < 1e-6
 
 
 # ------------------------------------------------------------- a second processor

@@ -304,7 +304,7 @@ BUGS = [
      "    rows = tuple((j, tuple(int(c) for c in np.flatnonzero(on_row[j])))",
      "    rows = tuple((j, tuple(int(c) for c in np.flatnonzero(on_row[0])))",
      "every moved column crossed with the first joint's columns", STATE, None),
-    ("identification/_search/_methods.py", "            elif f[single].min() < best:",
+    ("identification/_search/_methods.py", "            elif lowest[single] < best - tol:",
      "            elif True:", "a sweep's best single move kept though it raises the loss",
      SEARCH, None),
     ("identification/_search/_methods.py", "            centre, half = u, half * 2 / (G - 1)",
@@ -376,9 +376,9 @@ BUGS = [
      "        at_rest = rests(data, held,", "        at_rest = rests(data, named[0][1],",
      "every held-out recording's error weighed to the first one's speeds", HELD_OUT, None),
     ("identification/_default/_select_and_identify.py",
-     "    ident = identify(robot, recordings, estimator, model, limits=limits)",
-     "    ident = identify(robot, [*recordings, *held.values()], estimator, model, "
-     "limits=limits)", "the held-out recordings fitted too", HELD_OUT, None),
+     "    ident = identified(robot, recordings, estimator, model, limits)[0]",
+     "    ident = identified(robot, [*recordings, *held.values()], estimator, model, "
+     "limits)[0]", "the held-out recordings fitted too", HELD_OUT, None),
     ("identification/_default/_held_out.py",
      "labels = [f\"held_out[{k}]\" for k in range(len(held_out))]",
      "labels = [f\"held_out[{k + 1}]\" for k in range(len(held_out))]",
