@@ -8,7 +8,7 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from ._checks import inputs_of, refuse_overwriting
-from ._common import BUILTIN_ROBOTS, add_run_options, check_writable, subcommand
+from ._common import BUILTIN_ROBOTS, add_run_options, subcommand
 
 if TYPE_CHECKING:
     from ..dynamics._robot import Robot
@@ -58,7 +58,6 @@ def run(args: argparse.Namespace) -> None:
 
     to_stdout = args.json == "-"
     if args.json is not None and not to_stdout:
-        check_writable(None, args.json)
         refuse_overwriting({"--json": args.json}, inputs_of(args))
     robot = robots.load(args.robot, args.tip)
     paper_columns = args.robot == "rs010n"

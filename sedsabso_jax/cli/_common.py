@@ -201,8 +201,6 @@ def check_writable(out_dir: PathLike | None, json_path: PathLike | None,
     """Fail before the (long) run, not after it, when an output cannot be written: a file
     is made and removed where each output goes (its nearest existing directory), as
     permissions alone do not tell (root's, a read-only or virtual file system's)."""
-    import tempfile
-
     for flag, path in (("--out", out_dir), ("--json", json_path), ("--urdf-out", urdf_path)):
         if path is None:
             continue

@@ -11,7 +11,7 @@ import time
 from typing import TextIO
 
 from . import _common
-from ._common import Progress, add_run_options, check_writable, subcommand
+from ._common import Progress, add_run_options, subcommand
 
 
 class CompareProgress(Progress):
@@ -50,7 +50,6 @@ def run(args: argparse.Namespace) -> None:
                                 functions=args.functions, dimensions=args.dimensions,
                                 instances=args.instances, dtype=args.dtype, **runs)
     settings.check()
-    check_writable(args.out, None)
     t0 = time.perf_counter()
     with CompareProgress() as progress:
         docs = campaign(settings, args.out, progress=progress, workers=args.workers,

@@ -10,7 +10,7 @@ import os
 
 from . import _loading as files
 from ._checks import check_signals, inputs_of, one_rate, refuse_overwriting
-from ._common import add_run_options, check_writable, positive_float, subcommand
+from ._common import add_run_options, positive_float, subcommand
 
 #: The torque model unless --friction says otherwise: friction that grows with the load
 #: is what moved the gains most in the simulation study (benchmarks/drive_gains.py).
@@ -50,7 +50,6 @@ def run(args: argparse.Namespace) -> None:
     from ..identification._model._order import parse_friction
     from ..identification._model._torque_model import TorqueModel
 
-    check_writable(None, args.json)
     refuse_overwriting({"--json": args.json}, inputs_of(args, "--data", "--loaded"))
     if args.drive_gains is not None:
         raise ValueError("--drive-gains: identify-gains finds the drive gains; its --data "

@@ -12,7 +12,6 @@ from typing import Any
 from ._common import (
     LineProgress,
     add_run_options,
-    check_writable,
     non_negative_int,
     positive_int,
     subcommand,
@@ -105,7 +104,6 @@ def run(args: argparse.Namespace) -> None:
     from ..identification._model._order import parse_friction
     from ..identification._recordings import recordings_of
 
-    check_writable(args.out, args.json, args.urdf_out)
     refuse_contradictions(args)
     refuse_overwriting({"--json": args.json, "--urdf-out": args.urdf_out},
                        inputs_of(args, "--data", "--validate"))

@@ -41,7 +41,6 @@ from ._common import (
     LineProgress,
     add_run_options,
     check_files,
-    check_writable,
     non_negative_float,
     non_negative_int,
     positive_int,
@@ -64,7 +63,6 @@ def _cmd_reproduce(args) -> None:
                                    scenario=args.scenario, seed=args.seed, dtype=args.dtype,
                                    design_iterations=args.design_iterations)
     settings.check()
-    check_writable(args.out, args.json)
     # a line at each step (a swarm's runs are one call)
     with LineProgress("reproduce", then=write_seconds(settings), every=0) as progress:
         exp = experiment.run(settings, progress=progress)

@@ -9,7 +9,7 @@ import os
 
 from . import _loading as files
 from ._checks import check_signals, inputs_of, one_rate, refuse_overwriting
-from ._common import add_run_options, check_writable, subcommand
+from ._common import add_run_options, subcommand
 
 #: The torque model of the joint fit unless --friction says otherwise.
 DEFAULT_FRICTION = "viscous-coulomb+offset"
@@ -24,7 +24,6 @@ def run(args: argparse.Namespace) -> None:
     from ..identification._model._torque_model import TorqueModel
     from ..identification._payload._identify_payload import identify_payload
 
-    check_writable(None, args.json)
     refuse_overwriting({"--json": args.json}, inputs_of(args, "--data", "--loaded"))
     terms = parse_friction(args.friction)
     if not args.data and (args.friction != DEFAULT_FRICTION or args.offset_per_recording):

@@ -42,17 +42,14 @@ HALVINGS = 8
 @dataclasses.dataclass(frozen=True, eq=False)
 class Polished:
     """What :func:`polish` returns: the point ``u``, its ``loss``, the trials made, the
-    stencils evaluated (``steps``), whether it stopped because the next step's gain was
-    below :data:`FTOL` (``converged``), and per parameter whether it was held on a bound
-    (``at_bound``) or by the caller (``held``)."""
+    stencils evaluated (``steps``) and whether it stopped because the next step's gain
+    was below :data:`FTOL` (``converged``)."""
 
     u: np.ndarray
     loss: float
     evaluations: int
     steps: int
     converged: bool
-    at_bound: np.ndarray
-    held: np.ndarray
 
 
 def stencil(k: int) -> tuple[np.ndarray, list[tuple[int, int]]]:
@@ -116,7 +113,6 @@ def polish(problem: SearchProblem, u: np.ndarray, loss: float, lower: np.ndarray
     size = len(offsets) if batch is None else batch
     chunks = -(-len(offsets) // size)
     evaluations, steps, converged = 0, 0, False
-    at_bound = np.zeros(k, dtype=bool)
     scale = abs(loss)
     for steps in range(1, max_steps + 1):
         trials = u + STEP * offsets
@@ -142,4 +138,4 @@ def polish(problem: SearchProblem, u: np.ndarray, loss: float, lower: np.ndarray
         else:  # the model does not describe the loss here (a kink): stay
             break
         u, loss = u + d, f_new
-    return Polished(u, loss, evaluations, steps, converged, at_bound, held)
+    return Polished(u, loss, evaluations, steps, converged)
