@@ -1,6 +1,6 @@
 """Snapshot the command's outputs, to check that a change of structure changes no result.
 
-    python tools/snapshot.py run OUT [--only identify|reproduce|compare]
+    python tools/snapshot.py run OUT [--only identify|reproduce|compare] [--names a,b]
     python tools/snapshot.py diff OLD NEW
 
 ``run`` writes what ``identify`` (three shipped robots, several estimators and models),
@@ -46,7 +46,7 @@ def identify_runs(tmp: Path) -> dict[str, list[str]]:
     }
 
 
-def run(out: Path, only: str | None) -> None:
+def run(out: Path, only: str | None, names: set[str] | None = None) -> None:
     out.mkdir(parents=True, exist_ok=True)
     exe = str(Path(sys.executable).parent / "sedsabso-jax")
     data = out / "_data"  # converted recordings, under OUT so that paths compare
@@ -55,6 +55,8 @@ def run(out: Path, only: str | None) -> None:
     jobs: list[tuple[str, list[str]]] = []
     if only in (None, "identify"):
         for name, argv in identify_runs(data).items():
+            if names is not None and name not in names:
+                continue
             jobs.append((name, ["identify", *argv, "--out", str(out / name),
                                 "--json", str(out / f"{name}.json")]))
     if only in (None, "reproduce"):
@@ -109,12 +111,16 @@ def _masked(text: str) -> list[str]:
     return out
 
 
-def diff(old: Path, new: Path) -> int:
+def diff(old: Path, new: Path, subset: bool = False) -> int:
+    """Files that differ between snapshots ``old`` and ``new`` (``subset``: ``new`` was a
+    part of the runs, and what only ``old`` has is not counted)."""
     bad = 0
     files = sorted({p.relative_to(old) for p in old.rglob("*") if p.is_file()}
                    | {p.relative_to(new) for p in new.rglob("*") if p.is_file()})
     for rel in files:
         a, b = old / rel, new / rel
+        if subset and not b.exists():
+            continue
         if not (a.exists() and b.exists()):
             print(f"only in {'old' if a.exists() else 'new'}: {rel}")
             bad += 1
@@ -140,14 +146,16 @@ def main() -> int:
     r = sub.add_parser("run")
     r.add_argument("out", type=Path)
     r.add_argument("--only", choices=("identify", "reproduce", "compare"))
+    r.add_argument("--names", help="comma-separated identify runs to make (default: all)")
     d = sub.add_parser("diff")
     d.add_argument("old", type=Path)
     d.add_argument("new", type=Path)
+    d.add_argument("--subset", action="store_true", help="NEW holds some of OLD's runs")
     a = p.parse_args()
     if a.what == "run":
-        run(a.out, a.only)
+        run(a.out, a.only, None if a.names is None else set(a.names.split(",")))
         return 0
-    return diff(a.old, a.new)
+    return diff(a.old, a.new, a.subset)
 
 
 if __name__ == "__main__":
