@@ -56,12 +56,12 @@ from .._estimators._estimator import (
     per_joint,
 )
 from .._estimators._least_squares import OLS, WLS, PhysicallyConsistent
-from .._fit._samples import Samples
+from .._fit._samples import Samples, recorded
 from .._model._candidates import candidate_models
 from .._model._checks import model_of
 from .._model._torque_model import TorqueModel
 from .._options import one_or_more
-from .._recordings import Data, recordings_of, stacked
+from .._recordings import Data
 from .._work import parts
 from ._cross_validation import TIE_FRACTION as TIE_FRACTION
 from ._cross_validation import CrossValidation as CrossValidation
@@ -94,10 +94,8 @@ class Prepared:
             raise TypeError(f"validation must be a Validation (PhaseFolds(), SpeedSplits(), "
                             f"RecordingFolds(), GivenFolds(labels), Pooled(...)), got "
                             f"{validation!r}")
-        recordings = recordings_of(robot, data)
-        q, qd, qdd, tau, index = stacked(recordings)
-        return cls(recordings, Samples(q, qd, qdd, tau, index), validation.splits(recordings),
-                   validation)
+        recordings, samples = recorded(robot, data)
+        return cls(recordings, samples, validation.splits(recordings), validation)
 
     def validate(self, estimator: Estimator, model: TorqueModel, limits: np.ndarray | None,
                  on_fit: Callable[[], None] | None = None) -> CrossValidation:
