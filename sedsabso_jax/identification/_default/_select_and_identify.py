@@ -18,6 +18,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from ...dynamics._robot import Robot
+from ...measurements._container import Measurements
 from .._data_checks import check_selection_data
 from .._estimators._estimator import Estimator, Limits, ProgressCallback, per_joint
 from .._fit._identify import identified
@@ -26,43 +27,14 @@ from .._model._checks import model_of
 from .._model._torque_model import TorqueModel
 from .._options import one_or_more
 from .._recordings import Data, recordings_of
-from .._validation._selection import (
-    ESTIMATOR_CANDIDATES,
-    PRIOR_STRENGTHS,
-    choose_prior_strength,
-    select_model,
-)
+from .._validation._progress import Fits
+from .._validation._selection import choose_prior_strength, select_model
 from .._validation._splits import Validation
 from .._work import evaluate_seconds, fit_seconds
 from ._choice import Choice, DefaultValidation
 from ._held_out import HeldOutData, named_recordings
+from ._policy import DEFAULT
 from ._report import IdentificationReport
-
-
-class _Stages:
-    """One ``progress(label, done, total)`` over the stages of a call, in estimated
-    seconds (:mod:`.._work`): each stage reports its own work and is told the work of the
-    stages after it."""
-
-    def __init__(self, progress: ProgressCallback | None):
-        self.progress, self.done = progress, 0.0
-
-    def stage(self, later: float) -> ProgressCallback | None:
-        if self.progress is None:
-            return None
-        report, start = self.progress, self.done
-
-        def step(label: str, done: float, total: float) -> None:
-            self.done = start + done
-            report(label, self.done, start + total + later)
-
-        return step
-
-    def step(self, label: str, seconds: float, later: float) -> None:
-        """A stage of one step of ``seconds``, done, before ``later`` seconds more."""
-        if self.progress is not None:
-            self.done += seconds
-            self.progress(label, self.done, self.done + later)
 
 
 def _work_after(estimators: Iterable[Estimator], models: Iterable[TorqueModel], rows: int,
@@ -132,10 +104,22 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
     recordings = recordings_of(robot, data)
     models = candidate_models(robot) if models is None else tuple(
         model_of(robot, m) for m in one_or_more(models, TorqueModel))
-    estimators = ESTIMATOR_CANDIDATES if estimators is None else one_or_more(estimators,
-                                                                             Estimator)
+    estimators = DEFAULT.estimators if estimators is None else one_or_more(estimators,
+                                                                           Estimator)
     choice = Choice(validation, physical, prior_strength, len(models) * len(estimators),
                     len(recordings), any(m.recordings > 1 for m in models))
+    return chosen_and_identified(robot, recordings, choice, models, estimators, held=held,
+                                 limits=limits, progress=progress)
+
+
+def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: Choice,
+                          models: tuple[TorqueModel, ...], estimators: tuple[Estimator, ...],
+                          *, held: dict[str, Measurements], limits: Limits = None,
+                          progress: ProgressCallback | None = None) -> IdentificationReport:
+    """:func:`select_and_identify` by a :class:`~._choice.Choice` built once (the
+    command's, from its flags): ``recordings`` checked (:func:`~.._recordings.recordings_of`),
+    ``models`` and ``estimators`` the candidates, ``held`` the held-out recordings by
+    name (:func:`~._held_out.named_recordings`)."""
     estimators = choice.estimators(estimators)
     chosen_by = choice.validation_of(recordings)
     check_selection_data(robot, recordings, models, per_joint("limits", limits, robot.n_joints),
@@ -143,43 +127,43 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
                          regularized=choice.physical is True  # "cv" may choose none
                          and not isinstance(choice.prior_strength, str)
                          and choice.prior_strength > 0)
-    kept = (validation.kept if isinstance(validation, DefaultValidation)
+    kept = (choice.validation.kept if isinstance(choice.validation, DefaultValidation)
             and len(models) > 1 else None)
     # the work after the model choice, for the progress: the prior's validation, the fit
     # on all the data, the evaluation; of the costliest candidate until one is chosen
     rows, held_rows = sum(r.q.size for r in recordings), sum(r.q.size for r in held.values())
-    prior_fits = (len(PRIOR_STRENGTHS) * len(chosen_by.splits(recordings))
+    prior_fits = (len(DEFAULT.prior_strengths) * len(chosen_by.splits(recordings))
                   if progress is not None and chosen_by is not None
                   and choice.prior_strength == "cv" else 0)
-    later = _work_after(estimators, models + (() if kept is None else kept.models(models[-1])),
-                        rows, held_rows, prior_fits) if progress is not None else 0.0
-    stages = _Stages(progress)
+    fits = Fits(progress, _work_after(
+        estimators, models + (() if kept is None else kept.models(models[-1])), rows,
+        held_rows, prior_fits) if progress is not None else 0.0)
     selection = cv = None
     if chosen_by is None:
         estimator, model = estimators[0], models[0]
     else:
         selection = select_model(robot, recordings, models=models, estimators=estimators,
                                  validation=chosen_by, limits=limits, kept=kept,
-                                 progress=stages.stage(later))
+                                 progress=fits)
         estimator, model = selection.estimator, selection.model
         cv = selection.cross_validation
-        stages.step(f"{'chosen' if len(selection.candidates) > 1 else 'validated'}: "
-                    f"{estimator.name}, {model.friction}", 0.0,
-                    _work_after((estimator,), (model,), rows, held_rows, prior_fits))
+        fits.step(f"{'chosen' if len(selection.candidates) > 1 else 'validated'}: "
+                  f"{estimator.name}, {model.friction}", 0.0,
+                  _work_after((estimator,), (model,), rows, held_rows, prior_fits))
     prior_selection = None
     final = fit_seconds(estimator, model, rows, final=True)
     evaluation = evaluate_seconds(model, rows + held_rows)
     if choice.physical is True and choice.prior_strength == "cv":
+        fits.later = final + evaluation
         prior_selection = choose_prior_strength(robot, recordings, estimator, model,
-                                                strengths=PRIOR_STRENGTHS,
+                                                strengths=DEFAULT.prior_strengths,
                                                 validation=chosen_by,  # type: ignore[arg-type]
-                                                limits=limits,
-                                                progress=stages.stage(final + evaluation))
+                                                limits=limits, progress=fits)
         estimator, cv = prior_selection.estimator, prior_selection.cross_validation
     ident = identified(robot, recordings, estimator, model, limits)[0]  # data checked above
-    stages.step("fit on all the data", final, evaluation)
+    fits.step("fit on all the data", final, evaluation)
     report = IdentificationReport.evaluate(ident, recordings, held or None, limits,
                                            cross_validation=cv, selection=selection,
                                            prior_selection=prior_selection)
-    stages.step("evaluated" + (" on the held-out data" if held else ""), evaluation, 0.0)
+    fits.step("evaluated" + (" on the held-out data" if held else ""), evaluation, 0.0)
     return report

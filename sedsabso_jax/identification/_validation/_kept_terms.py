@@ -21,7 +21,7 @@ from collections.abc import Sequence
 
 import equinox as eqx
 
-from .._model._presliding import LARGEST_AT_REST, Presliding
+from .._default._policy import DEFAULT
 from .._model._term import AbstractTerm
 from .._model._torque_model import TorqueModel
 from ._cross_validation import CrossValidation, not_worse
@@ -70,7 +70,6 @@ class KeptTerms(eqx.Module):
         return min(fine, key=lambda i: tried[i].score) if fine else None
 
 
-#: What :func:`~sedsabso_jax.select_and_identify` adds to its choice by default:
-#: friction at rest with its displacements searched up to
-#: :data:`~.._model._presliding.LARGEST_AT_REST` (docs/results/extrapolation.md).
-KEPT_TERMS = KeptTerms(((Presliding(fitted=True, largest=LARGEST_AT_REST),),))
+#: What :func:`~sedsabso_jax.select_and_identify` adds to its choice by default
+#: (:attr:`~.._default._policy.Default.kept_terms`).
+KEPT_TERMS = KeptTerms(DEFAULT.kept_terms)

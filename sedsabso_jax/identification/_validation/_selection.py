@@ -41,7 +41,7 @@ torque models (:class:`~sedsabso_jax.TorqueModel`) and a validation object (defa
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from typing import cast
 
 import numpy as np
@@ -55,7 +55,8 @@ from .._estimators._estimator import (
     checked_estimator,
     per_joint,
 )
-from .._estimators._least_squares import OLS, WLS, PhysicallyConsistent
+from .._default._policy import DEFAULT
+from .._estimators._least_squares import OLS, PhysicallyConsistent
 from .._fit._samples import Samples, recorded
 from .._model._candidates import candidate_models
 from .._model._checks import model_of
@@ -71,11 +72,10 @@ from ._phase import DEFAULT_FOLDS as DEFAULT_FOLDS
 from ._progress import Fits, grid_seconds, kept_seconds, split_seconds, train_rows
 from ._splits import PhaseFolds, Splits, Validation
 
-#: The candidate estimators of :func:`select_model` (their weightings), simplest first.
-ESTIMATOR_CANDIDATES = (OLS(), WLS("residual"), WLS("limits"))
-#: The candidate pulls of a physically consistent fit toward the a-priori parameters
-#: (:func:`choose_prior_strength`; multiples of the data term's mean curvature), none first.
-PRIOR_STRENGTHS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)
+#: The candidate estimators of :func:`select_model` and the pulls toward the a-priori
+#: parameters of :func:`choose_prior_strength` (the default's,
+#: :class:`~.._default._policy.Default`).
+ESTIMATOR_CANDIDATES, PRIOR_STRENGTHS = DEFAULT.estimators, DEFAULT.prior_strengths
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -108,7 +108,7 @@ class Prepared:
 def cross_validate(robot: Robot, data: Data, estimator: Estimator = OLS(),
                    model: TorqueModel | None = None, *,
                    validation: Validation = PhaseFolds(), limits: Limits = None,
-                   progress: ProgressCallback | None = None) -> CrossValidation:
+                   progress: ProgressCallback | Fits | None = None) -> CrossValidation:
     """Validate :func:`~sedsabso_jax.identify` ``(robot, data, estimator, model)``: fit each
     split of ``validation`` (a :class:`~._splits.Validation`; default
     :data:`DEFAULT_FOLDS` phase folds) and predict it. ``data``: one recording or several
@@ -121,7 +121,8 @@ def cross_validate(robot: Robot, data: Data, estimator: Estimator = OLS(),
     checked_estimator(estimator).check(model, limits)
     each = split_seconds(train_rows(prepared.samples, prepared.splits), estimator, model,
                          parts(estimator, model))
-    fits = Fits(progress, sum(each))
+    fits = Fits.of(progress)
+    fits.ahead(sum(each))
     return prepared.validate(estimator, model, limits,
                              fits.after(f"{estimator.name}, {model.friction}", each))
 
@@ -189,16 +190,9 @@ class Selection:
                                for s, cv in self.candidates]}
 
 
-def simplest_not_worse(scores: Sequence[CrossValidation], physical: Sequence[bool]) -> int:
-    """The index of the candidate the one-standard-error rule picks among ``scores``
-    (each candidate's validation, ``physical`` whether its fit is physically
-    consistent): the simplest, fewest parameters, then physically consistent, then the
-    earlier, of those not worse than the lowest-scoring one
-    (:func:`~._cross_validation.not_worse`)."""
-    best = min(scores, key=lambda cv: cv.score)
-    order = sorted(range(len(scores)), key=lambda i: (scores[i].n_parameters,
-                                                      not physical[i], i))
-    return next(i for i in order if not_worse(scores[i], best))
+#: The index of the candidate the one-standard-error rule picks among validations
+#: ``(scores, physical)`` (:meth:`~.._default._policy.Default.simplest`).
+simplest_not_worse = DEFAULT.simplest
 
 
 def select_model(robot: Robot, data: Data, *,
@@ -206,7 +200,7 @@ def select_model(robot: Robot, data: Data, *,
                  estimators: Estimator | Iterable[Estimator] | None = None,
                  validation: Validation = PhaseFolds(), limits: Limits = None,
                  kept: KeptTerms | None = None,
-                 progress: ProgressCallback | None = None) -> Selection:
+                 progress: ProgressCallback | Fits | None = None) -> Selection:
     """Choose the torque model and the estimator by validation (module docstring).
 
     ``models`` (default :func:`~sedsabso_jax.identification.candidate_models` of the robot: its
@@ -235,7 +229,8 @@ def select_model(robot: Robot, data: Data, *,
     grid = [(estimator, model) for model in models for estimator in estimators]
     rows = train_rows(prepared.samples, prepared.splits)
     each, seen = grid_seconds(rows, grid), set().union(*(parts(e, m) for e, m in grid))
-    fits = Fits(progress, sum(map(sum, each)) + (0.0 if kept is None else max(
+    fits = Fits.of(progress)
+    fits.ahead(sum(map(sum, each)) + (0.0 if kept is None else max(
         sum(map(sum, kept_seconds(rows, kept, e, models[-1], seen))) for e in estimators)))
     tried, options = [], []
     for (estimator, model), seconds in zip(grid, each):
@@ -262,7 +257,7 @@ def _with_kept(kept: KeptTerms, index: int, tried: list, options: list,
     estimator, model = options[index]
     each = kept_seconds(train_rows(prepared.samples, prepared.splits), kept, estimator,
                         model, set().union(*(parts(e, m) for e, m in options)))
-    fits.total = fits.done + sum(map(sum, each))
+    fits.ahead(sum(map(sum, each)))
     found = []
     for with_terms, seconds in zip(kept.models(model), each):
         checked_estimator(estimator).check(with_terms, limits)
@@ -316,7 +311,7 @@ def choose_prior_strength(robot: Robot, data: Data,
                           model: TorqueModel | None = None, *,
                           strengths: Iterable[float] = PRIOR_STRENGTHS,
                           validation: Validation = PhaseFolds(), limits: Limits = None,
-                          progress: ProgressCallback | None = None) -> PriorSelection:
+                          progress: ProgressCallback | Fits | None = None) -> PriorSelection:
     """Choose how strongly a physically consistent fit is pulled toward the a-priori
     parameters (``prior_strength`` of :class:`~sedsabso_jax.PhysicallyConsistent`; an
     ``OLS`` or ``WLS`` ``estimator`` is made physically consistent) by ``validation``
@@ -336,7 +331,8 @@ def choose_prior_strength(robot: Robot, data: Data,
     estimator.check(model, limits)
     tried, estimators = [], []
     each = split_seconds(train_rows(prepared.samples, prepared.splits), estimator, model)
-    fits = Fits(progress, sum(each) * len(strengths))
+    fits = Fits.of(progress)
+    fits.ahead(sum(each) * len(strengths))
     for v in strengths:
         estimators.append(dataclasses.replace(estimator, prior_strength=v))
         tried.append((v, prepared.validate(estimators[-1], model, limits,
