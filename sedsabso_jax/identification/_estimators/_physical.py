@@ -75,9 +75,8 @@ def _programme(n_joints: int, dim: int, n_extra: int, nonneg: tuple[int, ...],
                bodies: tuple[int, ...] = ()):
     """The semidefinite programme of :func:`fit_physical` for one shape of model, with the
     data, the prior and its weight as cvxpy parameters (a DPP problem): cvxpy then
-    canonicalises it once, and later solves only put in new numbers (4-7x faster on the
-    KUKA LWR4+'s 64-column model, 0.04 s against 0.15-0.30 s a solve, where the
-    canonicalisation took 90 % of the time). The cached problem's parameters are shared:
+    canonicalises it once, and later solves only put in new numbers. The cached
+    problem's parameters are shared:
     fits of one model shape from several threads at once would race (one process, one
     fit at a time, as every caller here does).
     Returns ``(problem, parameters dict, full parameters p, extras or None)``."""

@@ -113,9 +113,8 @@ def cross_validation_of(estimator: Estimator, model: TorqueModel, samples: Sampl
     of the validation that made the splits; ``on_fit()`` after each fit."""
     measured, predicted, scores, tested = [], [], [], []
     every = np.arange(samples.q.shape[0])
-    # many small factorisations: one BLAS thread each (OpenBLAS's threads made the KUKA
-    # LWR4+'s default identify 1.3x slower on 2 idle cores); the user's setting is
-    # restored on leaving
+    # many small factorisations: one BLAS thread each (docs/explanation/
+    # identification-defaults.md); the user's setting is restored on leaving
     with threadpool_limits(limits=1, user_api="blas"):
         if not model.waiting:
             samples.rows(model)  # the splits' rows are taken from the whole's

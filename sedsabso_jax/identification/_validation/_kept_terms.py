@@ -3,12 +3,11 @@ unless they validate worse (:class:`KeptTerms`, :data:`KEPT_TERMS`).
 
 Friction at rest (:class:`~.._model._presliding.Presliding`) acts where joints stand
 still and reverse; an excitation recording barely rests, so a validation on it scores a
-model with the term much as one without (on kept-out robots, 0.3-1.9 % apart while the
-error on motions that rest fell by up to 19 %), and the one-standard-error rule, which
-prefers fewer parameters, drops it. Every real drive has friction at rest, so the
-default reverses the burden of proof for it: the term is added to the model
-:func:`~._selection.select_model` chose (same estimator), and kept unless its
-validation is worse than the chosen model's by more than the rule's margin
+model with the term much as one without, and the one-standard-error rule, which prefers
+fewer parameters, drops it (docs/explanation/identification-defaults.md). Every real
+drive has friction at rest, so the default reverses the burden of proof for it: the term
+is added to the model :func:`~._selection.select_model` chose (same estimator), and kept
+unless its validation is worse than the chosen model's by more than the rule's margin
 (:func:`~._cross_validation.not_worse`: the split-by-split excess above one standard
 error and above :data:`~._cross_validation.TIE_FRACTION`). Where the data do show that
 the term hurts, as with a plant whose joints hold nothing at rest and a model whose

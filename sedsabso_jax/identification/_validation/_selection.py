@@ -4,8 +4,7 @@ A :class:`~._splits.Validation` cuts the data into splits, each a set of samples
 and a set to predict. Two kinds answer two questions:
 
 - **phase folds** (:class:`~._splits.PhaseFolds`): a recording of an excitation trajectory
-  usually repeats its motion (the KUKA LWR4+ runs hold two periods of one trajectory, the
-  Panda's one and a half), so a contiguous block held out of one period is fitted in the
+  usually repeats its motion, so a contiguous block held out of one period is fitted in the
   other and contiguous-block cross-validation measures repeatability. Phase folds are
   stretches of the trajectory's PHASE (:func:`~._phase.phase_folds`: the repeat period is found
   from the positions' autocorrelation, fold ``k`` holds every sample whose phase lies in
@@ -18,19 +17,17 @@ and a set to predict. Two kinds answer two questions:
   are several.
 
 :func:`cross_validate` fits and predicts every split; the predictions are compared with
-the measured torques (NRMS over the torque limits where they are known, else the relative
-RMS), one score per split, their mean the validated error. :func:`select_model` validates
-a grid of torque models and estimators and keeps the simplest that is not worse than the
-best by more than one standard error (the one-standard-error rule: Hastie, Tibshirani &
-Friedman, *The Elements of Statistical Learning*, 2009, Sec. 7.10), with the standard
-error taken of the PAIRED split-by-split differences to the best: the splits differ in
-difficulty far more than the models do, and that common part cancels in the differences
-(unpaired, the rule once kept a model without the torque offset whose error was higher on
-every fold of the KUKA LWR4+ data). Excesses below 1 % of the best error
-(:data:`TIE_FRACTION`) count as ties, so a model is not made more complex for a gain no
-one could use; simpler is fewer parameters, then physically consistent, then the earlier
-estimator. Nothing here looks at held-out files: they are for judging the choice, never
-for making it.
+the measured torques (NRMS over the torque limits where they are known, else the
+relative RMS), one score per split, their mean the validated error. :func:`select_model`
+validates a grid of torque models and estimators and keeps the simplest that is not
+worse than the best by more than one standard error (the one-standard-error rule:
+Hastie, Tibshirani & Friedman, *The Elements of Statistical Learning*, 2009, Sec. 7.10),
+with the standard error taken of the PAIRED split-by-split differences to the best: the
+splits differ in difficulty far more than the models do, and that common part cancels in
+the differences. Excesses below 1 % of the best error (:data:`TIE_FRACTION`) count as
+ties, so a model is not made more complex for a gain no one could use; simpler is fewer
+parameters, then physically consistent, then the earlier estimator. Nothing here looks
+at held-out files: they are for judging the choice, never for making it.
 
 Each takes the data as :func:`~sedsabso_jax.identify` does, estimator objects, built
 torque models (:class:`~sedsabso_jax.TorqueModel`) and a validation object (default
@@ -48,6 +45,7 @@ import numpy as np
 
 from ...dynamics._robot import Robot
 from ...measurements._container import Measurements
+from .._default._policy import DEFAULT
 from .._estimators._estimator import (
     Estimator,
     Limits,
@@ -55,7 +53,6 @@ from .._estimators._estimator import (
     checked_estimator,
     per_joint,
 )
-from .._default._policy import DEFAULT
 from .._estimators._least_squares import OLS, PhysicallyConsistent
 from .._fit._samples import Samples, recorded
 from .._model._candidates import candidate_models
