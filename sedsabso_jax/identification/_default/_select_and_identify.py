@@ -53,53 +53,45 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
                         validation: Validation | DefaultValidation | None = DefaultValidation(),
                         physical: bool | None = None, prior_strength: float | str = 0.0,
                         progress: ProgressCallback | None = None) -> IdentificationReport:
-    """Identify ``robot`` from ``data`` as ``sedsabso-jax identify`` does by default.
+    """Identify ``robot`` from ``data`` as ``sedsabso-jax identify`` does by default
+    (:data:`~._policy.DEFAULT`): choose the estimator and the torque model by validation
+    (:func:`~sedsabso_jax.select_model`: the simplest within one standard error of the
+    lowest validated error), then the kept terms (added and kept unless they validate
+    worse), then the pull to the prior, fit on all of ``data``, and judge the fit on it,
+    on the validation and on each held-out recording alone (never used to choose or fit),
+    and, for several, on their mean. The rules between the options are :class:`Choice`'s.
 
-    1. Model choice: every estimator of ``estimators`` (default
-       :data:`~sedsabso_jax.identification.ESTIMATOR_CANDIDATES`; one
-       :class:`~sedsabso_jax.Estimator` or a sequence, e.g.
-       :func:`~sedsabso_jax.identification.estimator_candidates`), unconstrained and
-       physically consistent (``physical`` None; True: only physically consistent, False:
-       only unconstrained), with every torque model of ``models`` (default
-       :func:`~sedsabso_jax.identification.candidate_models` of the robot) is scored by
-       ``validation`` and the simplest within one standard error of the lowest is kept
-       (:func:`~sedsabso_jax.select_model`). The default,
-       :class:`~._choice.DefaultValidation`,
-       pools 5 folds of the motion's phase (leave one recording out for several
-       recordings), where the model interpolates, with :class:`~sedsabso_jax.SpeedSplits`,
-       where it must extrapolate in speed as on a faster motion: its score is the error to
-       expect on new motions, and the report gives each part's too. With one candidate, it
-       is only validated (``validation=None``: not at all). Then the default
-       validation's ``kept`` terms (friction at rest with its displacements searched,
-       :data:`~sedsabso_jax.identification.KEPT_TERMS`;
-       ``DefaultValidation(kept=None)``: none) are added to the choice among several
-       torque models and kept unless they validate worse: a validation on an excitation
-       recording, which barely rests, cannot show what the term does on motions that
-       rest, and every real drive has it.
-    2. ``prior_strength``, a number or ``"cv"`` (chosen from
-       :data:`~sedsabso_jax.identification.PRIOR_STRENGTHS` by the same validation,
-       :func:`~sedsabso_jax.choose_prior_strength`), pulls a physically consistent fit
-       toward the robot's a-priori parameters.
-    3. The fit on all of ``data``, judged on it, on the validation and on each held-out
-       recording alone (never used to choose or fit), and, for several, on their mean.
+    Arguments:
+        data: a :class:`~sedsabso_jax.Measurements`, several (one rate, fitted together;
+            one torque offset per recording: ``candidate_models(robot,
+            recordings=len(data))``), or ``(times, q, qd, qdd, tau)``.
+        held_out: one recording (a Measurements or its arrays), a list or tuple of
+            Measurements, or a mapping name -> Measurements (named by the key, else by
+            its ``source``).
+        limits: per-joint torque limits (the NRMS measure and the 1/limit weighting;
+            candidates weighting by them are skipped without).
+        models: one :class:`~sedsabso_jax.TorqueModel` or several (default
+            :func:`~sedsabso_jax.identification.candidate_models` of the robot).
+        estimators: one :class:`~sedsabso_jax.Estimator` or several (default
+            :data:`~sedsabso_jax.identification.ESTIMATOR_CANDIDATES`;
+            :func:`~sedsabso_jax.identification.estimator_candidates`).
+        validation: what chooses: :class:`~._choice.DefaultValidation` (phase folds, or
+            leave one recording out, pooled with :class:`~sedsabso_jax.SpeedSplits`, and
+            the kept terms), a :class:`~sedsabso_jax.Validation`, or None (one candidate,
+            not validated).
+        physical: None: each least-squares candidate unconstrained and physically
+            consistent; True: only physically consistent; False: only unconstrained.
+        prior_strength: the pull of a physically consistent fit toward the a-priori
+            parameters, a number or ``"cv"`` (chosen from
+            :data:`~sedsabso_jax.identification.PRIOR_STRENGTHS` by the same validation,
+            :func:`~sedsabso_jax.choose_prior_strength`).
+        progress: ``progress(label, done, total)`` after each fit and the evaluation,
+            in estimated seconds (:mod:`~sedsabso_jax.identification._work`; ``total``
+            revised as choices are made, ``done == total`` at the end); None: quiet.
 
-    ``data``: a :class:`~sedsabso_jax.Measurements`, several (recordings of one rate,
-    fitted together; models with one torque offset per recording:
-    ``candidate_models(robot, recordings=len(data))``), or ``(times, q, qd, qdd, tau)``;
-    ``held_out``: one recording (a Measurements or its arrays), a list or tuple of
-    Measurements, or a mapping name -> Measurements (each named in the report by its
-    key, else by its ``source``, a loaded file's path); ``limits``: per-joint torque
-    limits (the NRMS measure and the 1/limit weighting; candidates weighting by them are
-    skipped without); ``progress(label, done, total)``: called after each fit and after
-    the evaluation, ``done`` and ``total`` the estimated seconds of the work done and of
-    all (each fit's cost known before it runs, :mod:`~sedsabso_jax.identification._work`;
-    ``total`` revised as the choices are made), ``done == total`` at the end (None:
-    quiet). The rules between the options are :class:`Choice`'s. Data that cannot give
-    an answer are refused before the first fit
-    (:func:`~.._data_checks.check_selection_data`: too few samples for the largest
-    model, no motion, a poor excitation, torques 10 times the ``limits``, a validation
-    split too small to fit). Returns the :class:`~._report.IdentificationReport` the command
-    prints (``text()``) and writes (``write(...)``)."""
+    Returns the :class:`~._report.IdentificationReport` the command prints (``text()``)
+    and writes (``write(...)``). Raises ValueError before the first fit for data that
+    cannot give an answer (:func:`~.._data_checks.check_selection_data`)."""
     held = dict(named_recordings(robot, held_out))  # checked before any work
     recordings = recordings_of(robot, data)
     models = candidate_models(robot) if models is None else tuple(

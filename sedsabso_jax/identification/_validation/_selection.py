@@ -1,37 +1,17 @@
-"""Judging an identification on samples it was not fitted to, and choosing a model by it.
+"""Judging an identification on samples it was not fitted to, and choosing by it.
 
 A :class:`~._splits.Validation` cuts the data into splits, each a set of samples to fit
-and a set to predict. Two kinds answer two questions:
-
-- **phase folds** (:class:`~._splits.PhaseFolds`): a recording of an excitation trajectory
-  usually repeats its motion, so a contiguous block held out of one period is fitted in the
-  other and contiguous-block cross-validation measures repeatability. Phase folds are
-  stretches of the trajectory's PHASE (:func:`~._phase.phase_folds`: the repeat period is found
-  from the positions' autocorrelation, fold ``k`` holds every sample whose phase lies in
-  ``[k/K, (k+1)/K)``; a recording that does not repeat has phase = time). They predict the
-  error on motions like the fitted one: the model only ever interpolates.
-- **speed splits** (:class:`~._splits.SpeedSplits`, the default of
-  :func:`~sedsabso_jax.select_and_identify`): each joint's fast samples predicted by a fit to its
-  slow ones, as a new, faster motion asks the model to extrapolate (friction at speeds
-  never fitted). Leave one recording out (:class:`~._splits.RecordingFolds`) where there
-  are several.
-
-:func:`cross_validate` fits and predicts every split; the predictions are compared with
-the measured torques (NRMS over the torque limits where they are known, else the
-relative RMS), one score per split, their mean the validated error. :func:`select_model`
-validates a grid of torque models and estimators and keeps the simplest that is not
-worse than the best by more than one standard error (the one-standard-error rule:
-Hastie, Tibshirani & Friedman, *The Elements of Statistical Learning*, 2009, Sec. 7.10),
-with the standard error taken of the PAIRED split-by-split differences to the best: the
-splits differ in difficulty far more than the models do, and that common part cancels in
-the differences. Excesses below 1 % of the best error (:data:`TIE_FRACTION`) count as
-ties, so a model is not made more complex for a gain no one could use; simpler is fewer
-parameters, then physically consistent, then the earlier estimator. Nothing here looks
-at held-out files: they are for judging the choice, never for making it.
-
-Each takes the data as :func:`~sedsabso_jax.identify` does, estimator objects, built
-torque models (:class:`~sedsabso_jax.TorqueModel`) and a validation object (default
-``PhaseFolds()``).
+and one to predict: phase folds (:class:`~._splits.PhaseFolds`, the model interpolates),
+speed splits (:class:`~._splits.SpeedSplits`, it extrapolates in speed), leave one
+recording out (:class:`~._splits.RecordingFolds`), or several pooled.
+:func:`cross_validate` fits and predicts every split (one score per split: NRMS over the
+torque limits where known, else the relative RMS; their mean the validated error);
+:func:`select_model` validates a grid of torque models and estimators and keeps the
+simplest not worse than the best by the one-standard-error rule of the paired
+split-by-split differences (:meth:`~.._default._policy.Default.not_worse`, with ties below
+:data:`TIE_FRACTION`); :func:`choose_prior_strength` keeps the strongest pull to the prior
+the rule allows. Held-out files are never read here. Why: docs/explanation/
+identification-defaults.md.
 """
 
 
