@@ -1,6 +1,7 @@
-"""``sedsabso-jax identify``: the flags become a robot, data and estimator objects, then
-one library call (:func:`~sedsabso_jax.select_and_identify`) whose
-report is printed and written."""
+"""``sedsabso-jax identify``: the flags become a robot, data, the candidates and the
+library's :class:`~sedsabso_jax.identification.Choice` (checked before any data are
+loaded), then one library call (:func:`~sedsabso_jax.select_and_identify`'s, by that
+Choice) whose report is printed and written."""
 
 from __future__ import annotations
 

@@ -12,7 +12,8 @@ from .._default._policy import DEFAULT
 #: Folds of :func:`~._selection.cross_validate` unless told otherwise, and the
 #: autocorrelation of a repeat of the motion (the default's,
 #: :class:`~.._default._policy.Default`).
-DEFAULT_FOLDS, REPEAT_CORRELATION = DEFAULT.folds, DEFAULT.repeat_correlation
+DEFAULT_FOLDS = DEFAULT.folds
+REPEAT_CORRELATION = DEFAULT.repeat_correlation
 
 
 def repeat_period(times: Float[ArrayLike, " T"], q: Float[ArrayLike, "T n"], *,

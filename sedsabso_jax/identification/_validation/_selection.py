@@ -52,7 +52,8 @@ from ._splits import PhaseFolds, Splits, Validation
 #: The candidate estimators of :func:`select_model` and the pulls toward the a-priori
 #: parameters of :func:`choose_prior_strength` (the default's,
 #: :class:`~.._default._policy.Default`).
-ESTIMATOR_CANDIDATES, PRIOR_STRENGTHS = DEFAULT.estimators, DEFAULT.prior_strengths
+ESTIMATOR_CANDIDATES = DEFAULT.estimators
+PRIOR_STRENGTHS = DEFAULT.prior_strengths
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
