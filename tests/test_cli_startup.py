@@ -152,6 +152,7 @@ def test_the_flags_words_are_the_librarys():
     assert words.FRICTION_CANDIDATES == tuple(friction_text(t)
                                               for t in ident.FRICTION_CANDIDATES)
     assert words.PRIOR_STRENGTHS == ident.PRIOR_STRENGTHS
+    assert words.AUTO == ident.Default.auto
     assert words.GAIN_METHODS == tuple(ident.GAIN_METHODS)
     assert words.DEFAULT_GAIN_METHOD == DEFAULT_METHOD.name
     assert words.COMPARE_ALGORITHMS == DEFAULT_ALGORITHMS

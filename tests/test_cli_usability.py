@@ -121,7 +121,7 @@ def test_failures_while_running_are_status_1(error, status, message, data_file, 
                                               capsys):
     from sedsabso_jax.identification._default import _select_and_identify as _auto
 
-    monkeypatch.setattr(_auto, "select_and_identify", _failing(error))
+    monkeypatch.setattr(_auto, "chosen_and_identified", _failing(error))
     assert cli.main(["identify", "--robot", "rs010n", "--data", data_file]) == status
     assert capsys.readouterr().err == message
 
@@ -130,7 +130,7 @@ def test_solver_failure_is_status_1(data_file, monkeypatch, capsys):
     cvxpy = pytest.importorskip("cvxpy")
     from sedsabso_jax.identification._default import _select_and_identify as _auto
 
-    monkeypatch.setattr(_auto, "select_and_identify", _failing(cvxpy.error.SolverError("x")))
+    monkeypatch.setattr(_auto, "chosen_and_identified", _failing(cvxpy.error.SolverError("x")))
     assert cli.main(["identify", "--robot", "rs010n", "--data", data_file]) == 1
     assert capsys.readouterr().err.count("\n") == 1
 
@@ -148,7 +148,7 @@ def test_each_warning_once(data_file, monkeypatch, capsys):
         warnings.warn("other", stacklevel=1)
         raise ValueError("stop")
 
-    monkeypatch.setattr(_auto, "select_and_identify", warns)
+    monkeypatch.setattr(_auto, "chosen_and_identified", warns)
     assert cli.main(["identify", "--robot", "rs010n", "--data", data_file]) == 2
     assert capsys.readouterr().err.splitlines() == [
         "sedsabso-jax: warning: URDF 'a.urdf': origin twice", "sedsabso-jax: warning: other",

@@ -338,13 +338,12 @@ def test_select_and_identify_checks_its_arguments(rs010n_files):
 def test_the_command_asks_the_library_for_its_rules():
     """The command's flags go through the library's Choice (its rules, the flags' names):
     the same one-line errors, before any data are read."""
-    from sedsabso_jax.identification import Choice, DefaultValidation, Names
+    from sedsabso_jax.identification import Choice, DefaultValidation
 
-    flags = Names(physical="--physical", no_validation="--folds 0")
-    with pytest.raises(ValueError, match="^prior_strength needs --physical"):
-        Choice(prior_strength=1e-3, names=flags)
+    with pytest.raises(ValueError, match="^--prior-strength needs --physical"):
+        Choice(prior_strength=1e-3, flags=True)
     with pytest.raises(ValueError, match="^--folds 0 turns validation off"):
-        Choice(None, candidates=2, names=flags)
+        Choice(None, candidates=2, flags=True)
     with pytest.raises(ValueError, match=r"^one torque offset per recording needs several "
                                          r"recordings$"):
         Choice(offset_per_recording=True)

@@ -1,6 +1,7 @@
-"""``sedsabso-jax identify``: the flags become a robot, data and estimator objects, then
-one library call (:func:`~sedsabso_jax.select_and_identify`) whose
-report is printed and written."""
+"""``sedsabso-jax identify``: the flags become a robot, data, the candidates and the
+library's :class:`~sedsabso_jax.identification.Choice` (checked before any data are
+loaded), then one library call (:func:`~sedsabso_jax.select_and_identify`'s, by that
+Choice) whose report is printed and written."""
 
 from __future__ import annotations
 
@@ -32,9 +33,8 @@ from ._loading import (
     transmission_of,
     urdf_source,
 )
+from ._vocabulary import AUTO
 
-#: ``--method``, ``--weights`` and ``--friction`` left to validation.
-AUTO = "auto"
 WEIGHTS = (AUTO, "residual", "limits", "equal")
 #: The estimated seconds (as the library's, sedsabso_jax/identification/_work.py) of
 #: writing the report: its text and JSON, and with --out matplotlib's import and each
@@ -63,16 +63,10 @@ def _prior_strength(text: str):
 def _choice(args: argparse.Namespace, physical: bool | None, candidates: int) -> Any:
     """The library's :class:`~sedsabso_jax.identification.Choice` of the flags (its rules
     checked, named by the flags), before any data are loaded."""
-    from ..identification._default._choice import Choice, DefaultValidation, Names
+    from ..identification._default._choice import Choice, DefaultValidation
     from ..identification._validation._kept_terms import KEPT_TERMS
     from ..identification._validation._splits import PhaseFolds, RecordingFolds, SpeedSplits
 
-    names = Names(physical="--physical", prior_strength="--prior-strength",
-                  prior_cv="--prior-strength cv", no_validation="--folds 0",
-                  one_candidate="give --method, --weights and --friction (the fit is "
-                  "unconstrained unless --physical)",
-                  offset_per_recording="--offset-per-recording",
-                  validation=f"--validation {args.validation}", several="several --data files")
     validation: Any = None  # --folds 0: none
     if args.folds != 0 and args.validation == "pooled":
         validation = DefaultValidation(args.folds, None if args.friction != AUTO
@@ -82,7 +76,7 @@ def _choice(args: argparse.Namespace, physical: bool | None, candidates: int) ->
     elif args.folds != 0:
         validation = SpeedSplits() if args.validation == "speed" else RecordingFolds()
     return Choice(validation, physical, args.prior_strength, candidates, len(args.data),
-                  args.offset_per_recording, names)
+                  args.offset_per_recording, flags=True)
 
 
 def _validate_files(paths: list[str] | None) -> list[str]:
@@ -98,9 +92,10 @@ def run(args: argparse.Namespace) -> None:
     """The subcommand: check the flags, load, build the objects, one call, print, write."""
     from ..dynamics import _robots as robots
     from ..dynamics._limits import joint_limits
-    from ..identification._default._choice import estimator_candidates
-    from ..identification._default._select_and_identify import select_and_identify
-    from ..identification._model._candidates import FRICTION_CANDIDATES, candidate_models
+    from ..identification._default._held_out import named_recordings
+    from ..identification._default._policy import DEFAULT
+    from ..identification._default._select_and_identify import chosen_and_identified
+    from ..identification._model._candidates import candidate_models
     from ..identification._model._order import parse_friction
     from ..identification._recordings import recordings_of
 
@@ -112,11 +107,11 @@ def run(args: argparse.Namespace) -> None:
                          "--no-physical rules out")
     # --urdf-out: a simulator's URDF needs physically consistent link parameters
     physical = True if args.urdf_out is not None else args.physical
-    frictions = FRICTION_CANDIDATES if args.friction == AUTO else (
+    frictions = DEFAULT.frictions if args.friction == AUTO else (
         parse_friction(args.friction),)
-    estimators = estimator_candidates(None if args.method == AUTO else args.method,
-                                      args.weights, runs=args.runs,
-                                      iterations=args.iterations, seed=args.seed)
+    estimators = DEFAULT.estimator_candidates(None if args.method == AUTO else args.method,
+                                              args.weights, runs=args.runs,
+                                              iterations=args.iterations, seed=args.seed)
     choice = _choice(args, physical, len(frictions) * len(estimators))
     with urdf_source(args.robot) as source:
         if (args.urdf_out is not None and source is not None
@@ -143,11 +138,9 @@ def run(args: argparse.Namespace) -> None:
     # every fit, the evaluation, the files
     figures = 0 if args.out is None else 1 + len(validate)
     with LineProgress("identify", then=writing_seconds(figures)) as progress:
-        report = select_and_identify(robot, data, held_out=held_out, limits=limits,
-                                     models=models, estimators=estimators,
-                                     validation=choice.validation, physical=physical,
-                                     prior_strength=choice.prior_strength,
-                                     progress=progress)
+        report = chosen_and_identified(robot, data, choice, models, estimators,
+                                       held=dict(named_recordings(robot, held_out)),
+                                       limits=limits, progress=progress)
     paths = [os.path.abspath(p) for p in args.data]
     settings = {"robot": args.robot, "data": paths[0] if len(paths) == 1 else paths,
                 "validate": (None if not validate else os.path.abspath(validate[0])

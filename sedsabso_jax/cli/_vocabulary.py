@@ -5,6 +5,9 @@ tests/test_cli_startup.py checks; the library checks them again when a command r
 
 from __future__ import annotations
 
+#: ``identification.AUTO``: ``--method``, ``--weights`` and ``--friction`` left to
+#: validation.
+AUTO = "auto"
 #: ``Estimator.registered()``: the names ``identify --method`` takes.
 ESTIMATORS = ("OLS", "WLS", "L1", "LM", "SEDSABSO", "BSO", "LDWPSO")
 #: ``identification.FRICTION_TERMS``: the words of ``--friction``'s ``a+b`` text.

@@ -13,8 +13,9 @@ Here: what writing a torque-model term needs (``AbstractTerm``, ``AbstractScale`
 parameters (``CoordinateSearch``, ``PopulationSearch``, ``LeastSquaresSearch``, their
 base ``AbstractSearch``, and the problem they search, ``Projection``), what writing an
 estimator needs, the command line's friction text (``parse_friction``), the default
-candidates (``candidate_models``, ``estimator_candidates``) and the rules between
-``select_and_identify``'s options (``Choice``), the validation's parts and results,
+candidates (``candidate_models``, ``estimator_candidates``), the default choice as one
+value (``Default``, ``DEFAULT``) and the rules between ``select_and_identify``'s options
+(``Choice``), the validation's parts and results,
 Dahl's presliding state (``dahl_state``), how far held-out data extrapolate
 (``extrapolation``), each held-out recording of a report judged alone (``HeldOut``) and
 metrics averaged over recordings (``mean_metrics``). Builds on :mod:`sedsabso_jax.dynamics`, :mod:`sedsabso_jax.optim`
@@ -32,9 +33,10 @@ from __future__ import annotations
 
 from ._default._choice import Choice as Choice
 from ._default._choice import DefaultValidation as DefaultValidation
-from ._default._choice import Names as Names
 from ._default._choice import estimator_candidates as estimator_candidates
 from ._default._held_out import HeldOut as HeldOut
+from ._default._policy import DEFAULT as DEFAULT
+from ._default._policy import Default as Default
 from ._default._report import figure_torques as figure_torques
 from ._estimators._box_search import FACE_TOLERANCE as FACE_TOLERANCE
 from ._estimators._estimator import EstimatorFit as EstimatorFit
@@ -92,7 +94,8 @@ __all__ = [
     "FitProblem", "EstimatorFit", "weigh", "AbstractLeastSquares", "FACE_TOLERANCE",
     "CrossValidation", "phase_folds", "repeat_period", "DEFAULT_FOLDS", "Selection",
     "simplest_not_worse", "PriorSelection", "FRICTION_CANDIDATES", "ESTIMATOR_CANDIDATES",
-    "PRIOR_STRENGTHS", "estimator_candidates", "candidate_models", "Choice", "Names",
+    "PRIOR_STRENGTHS", "estimator_candidates", "candidate_models", "Choice", "Default",
+    "DEFAULT",
     "DefaultValidation", "nrms_over_limits", "FRICTION_TERMS", "TERMS", "AbstractTerm",
     "AbstractScale", "Signals", "Nonlinear", "diagonal", "Fitted", "SETTLE_RTOL",
     "parse_friction", "figure_torques", "extrapolation", "Extrapolation", "Splits",

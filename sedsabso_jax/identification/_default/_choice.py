@@ -16,46 +16,15 @@ from .._estimators._estimator import Estimator, Sigma
 from .._estimators._least_squares import PhysicallyConsistent
 from .._options import as_float, as_int, check_count
 from .._validation._kept_terms import KEPT_TERMS, KeptTerms
-from .._validation._phase import DEFAULT_FOLDS
-from .._validation._selection import ESTIMATOR_CANDIDATES
 from .._validation._splits import PhaseFolds, Pooled, RecordingFolds, SpeedSplits, Validation
-
-#: The weightings a fixed estimator is tried with (None: equal), simplest first.
-SIGMA_CANDIDATES = (None, "residual", "limits")
-#: ``sigma`` of :func:`estimator_candidates` that leaves the weighting to validation.
-AUTO = "auto"
+from ._policy import AUTO, DEFAULT
 
 
 def estimator_candidates(method: str | None = None, sigma: Sigma = AUTO, **options: Any
                          ) -> tuple[Estimator, ...]:
-    """The estimators the default chooses among.
-
-    - ``method`` None: :data:`~sedsabso_jax.identification.ESTIMATOR_CANDIDATES` (OLS,
-      Gautier's WLS, WLS by the limits), or those of them with weighting ``sigma``;
-    - a registered name (``"L1"``, ``"SEDSABSO"``, ...) with ``sigma`` :data:`AUTO`: that
-      estimator with each weighting of :data:`SIGMA_CANDIDATES` (WLS without None, which
-      is its residual weighting), except a costly one (a box search: every run is
-      costly), which searches no weighting (equal weights);
-    - a name and a ``sigma``: that estimator alone.
-
-    ``sigma``: :data:`AUTO`, None or ``"equal"``, ``"residual"``, ``"limits"``;
-    ``options``: the named estimator's options (``runs``, ``iterations``, ``seed``, ...;
-    those it does not have are ignored)."""
-    if sigma != AUTO and sigma != "equal" and sigma not in SIGMA_CANDIDATES:
-        raise ValueError(f"sigma must be {AUTO!r}, 'equal' (None), 'residual' or 'limits', "
-                         f"got {sigma!r}")
-    if method is None:
-        wanted = None if sigma == "equal" else sigma
-        return tuple(e for e in ESTIMATOR_CANDIDATES if sigma == AUTO or e.sigma == wanted)
-    first = Estimator.named(method, **options)
-    if sigma == "equal":  # None where that is equal weights, else explicit
-        sigma = None if first.default_weighting == "equal" else "equal"
-    if sigma != AUTO:
-        return (Estimator.named(method, sigma=sigma, **options),)
-    if first.costly:
-        return (first,)
-    return tuple(Estimator.named(method, sigma=s, **options) for s in SIGMA_CANDIDATES
-                 if s is not None or first.default_weighting == "equal")
+    """The estimators the default chooses among
+    (:meth:`~._policy.Default.estimator_candidates` of :data:`~._policy.DEFAULT`)."""
+    return DEFAULT.estimator_candidates(method, sigma, **options)
 
 
 class DefaultValidation(eqx.Module):
@@ -69,7 +38,7 @@ class DefaultValidation(eqx.Module):
     displacements searched; None: nothing) added to the choice and kept unless it
     validates worse."""
 
-    folds: int = eqx.field(default=DEFAULT_FOLDS, converter=as_int)
+    folds: int = eqx.field(default=DEFAULT.folds, converter=as_int)
     kept: KeptTerms | None = KEPT_TERMS
     interpolation: Validation | None = None
     kind: ClassVar[str] = "default"
@@ -91,25 +60,26 @@ class DefaultValidation(eqx.Module):
         return Pooled((interpolation, SpeedSplits()))
 
 
-@dataclasses.dataclass(frozen=True)
-class Names:
-    """How :class:`Choice`'s messages name the options: :func:`~sedsabso_jax.select_and_identify`'s
-    arguments unless told (the command line gives its flags)."""
-
-    physical: str = "physical=True"
-    prior_strength: str = "prior_strength"
-    prior_cv: str = "prior_strength='cv'"
-    no_validation: str = "validation=None"
-    one_candidate: str = "give one estimator and one torque model"
-    offset_per_recording: str = "one torque offset per recording"
-    validation: str = "validation"
-    several: str = "several recordings"
+#: How :class:`Choice`'s messages name the options: as
+#: :func:`~sedsabso_jax.select_and_identify`'s arguments, or as the command's flags.
+_SPELLING = {
+    "physical": ("physical=True", "--physical"),
+    "prior_strength": ("prior_strength", "--prior-strength"),
+    "prior_cv": ("prior_strength='cv'", "--prior-strength cv"),
+    "no_validation": ("validation=None", "--folds 0"),
+    "one_candidate": ("give one estimator and one torque model", "give --method, --weights "
+                      "and --friction (the fit is unconstrained unless --physical)"),
+    "offset_per_recording": ("one torque offset per recording", "--offset-per-recording"),
+    "validation": ("validation", "--validation recordings"),
+    "several": ("several recordings", "several --data files")}
 
 
 class Choice(eqx.Module):
     """How :func:`~sedsabso_jax.select_and_identify` chooses, with the rules between its
     options stated once and checked when built (a one-line ValueError naming the options
-    as ``names`` spells them): the command line builds one from its flags before it loads any data.
+    as the library's arguments, or with ``flags`` as the command's flags): the command
+    line builds one from its flags before it loads any data, and hands it on
+    (:func:`~._select_and_identify.chosen_and_identified`).
 
     ``validation``: what chooses (a :class:`~sedsabso_jax.Validation`, a
     :class:`DefaultValidation`, or None: nothing is validated, one candidate is fitted);
@@ -124,30 +94,31 @@ class Choice(eqx.Module):
     candidates: int = 1
     recordings: int = 1
     offset_per_recording: bool = False
-    names: Names = Names()
+    flags: bool = False
 
     def __check_init__(self):
-        n = self.names
+        n = {k: v[self.flags] for k, v in _SPELLING.items()}
         if self.physical not in (None, True, False):
             raise ValueError(f"physical must be None (both, chosen by validation), True or "
                              f"False, got {self.physical!r}")
         if self.prior_strength != "cv" and not (isinstance(self.prior_strength, float)
                                                 and self.prior_strength >= 0):
-            raise ValueError(f"{n.prior_strength} must be a number >= 0 or 'cv', got "
+            raise ValueError(f"{n['prior_strength']} must be a number >= 0 or 'cv', got "
                              f"{self.prior_strength!r}")
         if self.prior_strength != 0.0 and self.physical is not True:
-            raise ValueError(f"{n.prior_strength} needs {n.physical}: the pull to the "
+            raise ValueError(f"{n['prior_strength']} needs {n['physical']}: the pull to the "
                              f"a-priori parameters is part of the physically consistent fit")
         if self.prior_strength == "cv" and self.validation is None:
-            raise ValueError(f"{n.prior_cv} chooses by validation, which {n.no_validation} "
-                             f"turns off: give a number")
+            raise ValueError(f"{n['prior_cv']} chooses by validation, which "
+                             f"{n['no_validation']} turns off: give a number")
         if self.validation is None and self.candidates > 1:
-            raise ValueError(f"{n.no_validation} turns validation off, so nothing can be "
-                             f"chosen by it: {n.one_candidate}")
+            raise ValueError(f"{n['no_validation']} turns validation off, so nothing can be "
+                             f"chosen by it: {n['one_candidate']}")
         if self.offset_per_recording and self.recordings < 2:
-            raise ValueError(f"{n.offset_per_recording} needs {n.several}")
+            raise ValueError(f"{n['offset_per_recording']} needs {n['several']}")
         if self.validation is not None and self.recordings < self.validation.min_recordings:
-            raise ValueError(f"{n.validation} ({self.validation.kind}) needs {n.several}")
+            raise ValueError(f"{n['validation']} ({self.validation.kind}) needs "
+                             f"{n['several']}")
 
     def validation_of(self, recordings: Sequence[Measurements]) -> Validation | None:
         """The validation for ``recordings`` (None: none)."""

@@ -18,6 +18,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from ...dynamics._robot import Robot
+from ...measurements._container import Measurements
 from .._data_checks import check_selection_data
 from .._estimators._estimator import Estimator, Limits, ProgressCallback, per_joint
 from .._fit._identify import identified
@@ -26,43 +27,14 @@ from .._model._checks import model_of
 from .._model._torque_model import TorqueModel
 from .._options import one_or_more
 from .._recordings import Data, recordings_of
-from .._validation._selection import (
-    ESTIMATOR_CANDIDATES,
-    PRIOR_STRENGTHS,
-    choose_prior_strength,
-    select_model,
-)
+from .._validation._progress import Fits
+from .._validation._selection import choose_prior_strength, select_model
 from .._validation._splits import Validation
 from .._work import evaluate_seconds, fit_seconds
 from ._choice import Choice, DefaultValidation
 from ._held_out import HeldOutData, named_recordings
+from ._policy import DEFAULT
 from ._report import IdentificationReport
-
-
-class _Stages:
-    """One ``progress(label, done, total)`` over the stages of a call, in estimated
-    seconds (:mod:`.._work`): each stage reports its own work and is told the work of the
-    stages after it."""
-
-    def __init__(self, progress: ProgressCallback | None):
-        self.progress, self.done = progress, 0.0
-
-    def stage(self, later: float) -> ProgressCallback | None:
-        if self.progress is None:
-            return None
-        report, start = self.progress, self.done
-
-        def step(label: str, done: float, total: float) -> None:
-            self.done = start + done
-            report(label, self.done, start + total + later)
-
-        return step
-
-    def step(self, label: str, seconds: float, later: float) -> None:
-        """A stage of one step of ``seconds``, done, before ``later`` seconds more."""
-        if self.progress is not None:
-            self.done += seconds
-            self.progress(label, self.done, self.done + later)
 
 
 def _work_after(estimators: Iterable[Estimator], models: Iterable[TorqueModel], rows: int,
@@ -81,61 +53,65 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
                         validation: Validation | DefaultValidation | None = DefaultValidation(),
                         physical: bool | None = None, prior_strength: float | str = 0.0,
                         progress: ProgressCallback | None = None) -> IdentificationReport:
-    """Identify ``robot`` from ``data`` as ``sedsabso-jax identify`` does by default.
+    """Identify ``robot`` from ``data`` as ``sedsabso-jax identify`` does by default
+    (:data:`~._policy.DEFAULT`): choose the estimator and the torque model by validation
+    (:func:`~sedsabso_jax.select_model`: the simplest within one standard error of the
+    lowest validated error), then the kept terms (added and kept unless they validate
+    worse), then the pull to the prior, fit on all of ``data``, and judge the fit on it,
+    on the validation and on each held-out recording alone (never used to choose or fit),
+    and, for several, on their mean. The rules between the options are :class:`Choice`'s.
 
-    1. Model choice: every estimator of ``estimators`` (default
-       :data:`~sedsabso_jax.identification.ESTIMATOR_CANDIDATES`; one
-       :class:`~sedsabso_jax.Estimator` or a sequence, e.g.
-       :func:`~sedsabso_jax.identification.estimator_candidates`), unconstrained and
-       physically consistent (``physical`` None; True: only physically consistent, False:
-       only unconstrained), with every torque model of ``models`` (default
-       :func:`~sedsabso_jax.identification.candidate_models` of the robot) is scored by
-       ``validation`` and the simplest within one standard error of the lowest is kept
-       (:func:`~sedsabso_jax.select_model`). The default,
-       :class:`~._choice.DefaultValidation`,
-       pools 5 folds of the motion's phase (leave one recording out for several
-       recordings), where the model interpolates, with :class:`~sedsabso_jax.SpeedSplits`,
-       where it must extrapolate in speed as on a faster motion: its score is the error to
-       expect on new motions, and the report gives each part's too. With one candidate, it
-       is only validated (``validation=None``: not at all). Then the default
-       validation's ``kept`` terms (friction at rest with its displacements searched,
-       :data:`~sedsabso_jax.identification.KEPT_TERMS`;
-       ``DefaultValidation(kept=None)``: none) are added to the choice among several
-       torque models and kept unless they validate worse: a validation on an excitation
-       recording, which barely rests, cannot show what the term does on motions that
-       rest, and every real drive has it.
-    2. ``prior_strength``, a number or ``"cv"`` (chosen from
-       :data:`~sedsabso_jax.identification.PRIOR_STRENGTHS` by the same validation,
-       :func:`~sedsabso_jax.choose_prior_strength`), pulls a physically consistent fit
-       toward the robot's a-priori parameters.
-    3. The fit on all of ``data``, judged on it, on the validation and on each held-out
-       recording alone (never used to choose or fit), and, for several, on their mean.
+    Arguments:
+        data: a :class:`~sedsabso_jax.Measurements`, several (one rate, fitted together;
+            one torque offset per recording: ``candidate_models(robot,
+            recordings=len(data))``), or ``(times, q, qd, qdd, tau)``.
+        held_out: one recording (a Measurements or its arrays), a list or tuple of
+            Measurements, or a mapping name -> Measurements (named by the key, else by
+            its ``source``).
+        limits: per-joint torque limits (the NRMS measure and the 1/limit weighting;
+            candidates weighting by them are skipped without).
+        models: one :class:`~sedsabso_jax.TorqueModel` or several (default
+            :func:`~sedsabso_jax.identification.candidate_models` of the robot).
+        estimators: one :class:`~sedsabso_jax.Estimator` or several (default
+            :data:`~sedsabso_jax.identification.ESTIMATOR_CANDIDATES`;
+            :func:`~sedsabso_jax.identification.estimator_candidates`).
+        validation: what chooses: :class:`~._choice.DefaultValidation` (phase folds, or
+            leave one recording out, pooled with :class:`~sedsabso_jax.SpeedSplits`, and
+            the kept terms), a :class:`~sedsabso_jax.Validation`, or None (one candidate,
+            not validated).
+        physical: None: each least-squares candidate unconstrained and physically
+            consistent; True: only physically consistent; False: only unconstrained.
+        prior_strength: the pull of a physically consistent fit toward the a-priori
+            parameters, a number or ``"cv"`` (chosen from
+            :data:`~sedsabso_jax.identification.PRIOR_STRENGTHS` by the same validation,
+            :func:`~sedsabso_jax.choose_prior_strength`).
+        progress: ``progress(label, done, total)`` after each fit and the evaluation,
+            in estimated seconds (:mod:`~sedsabso_jax.identification._work`; ``total``
+            revised as choices are made, ``done == total`` at the end); None: quiet.
 
-    ``data``: a :class:`~sedsabso_jax.Measurements`, several (recordings of one rate,
-    fitted together; models with one torque offset per recording:
-    ``candidate_models(robot, recordings=len(data))``), or ``(times, q, qd, qdd, tau)``;
-    ``held_out``: one recording (a Measurements or its arrays), a list or tuple of
-    Measurements, or a mapping name -> Measurements (each named in the report by its
-    key, else by its ``source``, a loaded file's path); ``limits``: per-joint torque
-    limits (the NRMS measure and the 1/limit weighting; candidates weighting by them are
-    skipped without); ``progress(label, done, total)``: called after each fit and after
-    the evaluation, ``done`` and ``total`` the estimated seconds of the work done and of
-    all (each fit's cost known before it runs, :mod:`~sedsabso_jax.identification._work`;
-    ``total`` revised as the choices are made), ``done == total`` at the end (None:
-    quiet). The rules between the options are :class:`Choice`'s. Data that cannot give
-    an answer are refused before the first fit
-    (:func:`~.._data_checks.check_selection_data`: too few samples for the largest
-    model, no motion, a poor excitation, torques 10 times the ``limits``, a validation
-    split too small to fit). Returns the :class:`~._report.IdentificationReport` the command
-    prints (``text()``) and writes (``write(...)``)."""
+    Returns the :class:`~._report.IdentificationReport` the command prints (``text()``)
+    and writes (``write(...)``). Raises ValueError before the first fit for data that
+    cannot give an answer (:func:`~.._data_checks.check_selection_data`)."""
     held = dict(named_recordings(robot, held_out))  # checked before any work
     recordings = recordings_of(robot, data)
     models = candidate_models(robot) if models is None else tuple(
         model_of(robot, m) for m in one_or_more(models, TorqueModel))
-    estimators = ESTIMATOR_CANDIDATES if estimators is None else one_or_more(estimators,
-                                                                             Estimator)
+    estimators = DEFAULT.estimators if estimators is None else one_or_more(estimators,
+                                                                           Estimator)
     choice = Choice(validation, physical, prior_strength, len(models) * len(estimators),
                     len(recordings), any(m.recordings > 1 for m in models))
+    return chosen_and_identified(robot, recordings, choice, models, estimators, held=held,
+                                 limits=limits, progress=progress)
+
+
+def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: Choice,
+                          models: tuple[TorqueModel, ...], estimators: tuple[Estimator, ...],
+                          *, held: dict[str, Measurements], limits: Limits = None,
+                          progress: ProgressCallback | None = None) -> IdentificationReport:
+    """:func:`select_and_identify` by a :class:`~._choice.Choice` built once (the
+    command's, from its flags): ``recordings`` checked (:func:`~.._recordings.recordings_of`),
+    ``models`` and ``estimators`` the candidates, ``held`` the held-out recordings by
+    name (:func:`~._held_out.named_recordings`)."""
     estimators = choice.estimators(estimators)
     chosen_by = choice.validation_of(recordings)
     check_selection_data(robot, recordings, models, per_joint("limits", limits, robot.n_joints),
@@ -143,43 +119,43 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
                          regularized=choice.physical is True  # "cv" may choose none
                          and not isinstance(choice.prior_strength, str)
                          and choice.prior_strength > 0)
-    kept = (validation.kept if isinstance(validation, DefaultValidation)
+    kept = (choice.validation.kept if isinstance(choice.validation, DefaultValidation)
             and len(models) > 1 else None)
     # the work after the model choice, for the progress: the prior's validation, the fit
     # on all the data, the evaluation; of the costliest candidate until one is chosen
     rows, held_rows = sum(r.q.size for r in recordings), sum(r.q.size for r in held.values())
-    prior_fits = (len(PRIOR_STRENGTHS) * len(chosen_by.splits(recordings))
+    prior_fits = (len(DEFAULT.prior_strengths) * len(chosen_by.splits(recordings))
                   if progress is not None and chosen_by is not None
                   and choice.prior_strength == "cv" else 0)
-    later = _work_after(estimators, models + (() if kept is None else kept.models(models[-1])),
-                        rows, held_rows, prior_fits) if progress is not None else 0.0
-    stages = _Stages(progress)
+    fits = Fits(progress, _work_after(
+        estimators, models + (() if kept is None else kept.models(models[-1])), rows,
+        held_rows, prior_fits) if progress is not None else 0.0)
     selection = cv = None
     if chosen_by is None:
         estimator, model = estimators[0], models[0]
     else:
         selection = select_model(robot, recordings, models=models, estimators=estimators,
                                  validation=chosen_by, limits=limits, kept=kept,
-                                 progress=stages.stage(later))
+                                 progress=fits)
         estimator, model = selection.estimator, selection.model
         cv = selection.cross_validation
-        stages.step(f"{'chosen' if len(selection.candidates) > 1 else 'validated'}: "
-                    f"{estimator.name}, {model.friction}", 0.0,
-                    _work_after((estimator,), (model,), rows, held_rows, prior_fits))
+        fits.step(f"{'chosen' if len(selection.candidates) > 1 else 'validated'}: "
+                  f"{estimator.name}, {model.friction}", 0.0,
+                  _work_after((estimator,), (model,), rows, held_rows, prior_fits))
     prior_selection = None
     final = fit_seconds(estimator, model, rows, final=True)
     evaluation = evaluate_seconds(model, rows + held_rows)
     if choice.physical is True and choice.prior_strength == "cv":
+        fits.later = final + evaluation
         prior_selection = choose_prior_strength(robot, recordings, estimator, model,
-                                                strengths=PRIOR_STRENGTHS,
+                                                strengths=DEFAULT.prior_strengths,
                                                 validation=chosen_by,  # type: ignore[arg-type]
-                                                limits=limits,
-                                                progress=stages.stage(final + evaluation))
+                                                limits=limits, progress=fits)
         estimator, cv = prior_selection.estimator, prior_selection.cross_validation
     ident = identified(robot, recordings, estimator, model, limits)[0]  # data checked above
-    stages.step("fit on all the data", final, evaluation)
+    fits.step("fit on all the data", final, evaluation)
     report = IdentificationReport.evaluate(ident, recordings, held or None, limits,
                                            cross_validation=cv, selection=selection,
                                            prior_selection=prior_selection)
-    stages.step("evaluated" + (" on the held-out data" if held else ""), evaluation, 0.0)
+    fits.step("evaluated" + (" on the held-out data" if held else ""), evaluation, 0.0)
     return report

@@ -199,7 +199,6 @@ class PhysicallyConsistent(Estimator):
                                self.prior_strength)
         else:
             fit = fit_bodies(problem.model, rows.weighted_factor)
-        extra = {"physical_fit": {"solver": fit.solver, "status": fit.status,
-                                  "iterations": fit.iterations, "seconds": fit.seconds}}
+        extra = {"physical_fit": fit.report}
         return EstimatorFit(np.asarray(fit.values, dtype=float), fit.full_params, rows.sigma,
                             rows.factor0, rows.W, rows.b, None, extra)

@@ -33,7 +33,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import time
-import warnings
 
 import numpy as np
 from jaxtyping import ArrayLike, Float
@@ -42,24 +41,25 @@ from ...dynamics._inertia import pseudo_inertia
 from ...dynamics._robot import N_LINK_PARAMETERS
 from ...optim._linear import Factorization
 from .._model._torque_model import TorqueModel
+from ._conic import NOT_SOLVED, solve
 
 #: Smallest eigenvalue of each link's pseudo-inertia in a physical fit (kg m^2, kg).
 PSD_MARGIN = 1e-6
 #: Smallest pull to the prior, relative to the mean curvature of the data term.
 RIDGE = 1e-9
+#: How the fit's errors name it, and what a failed solve did not find.
+WHAT, NONE_FOUND = "physically consistent fit", "no consistent parameters were found"
 
 
 @dataclasses.dataclass(frozen=True)
 class PhysicalFit:
     """What :func:`fit_physical` returns: the model's values (base parameters, then the
-    extras), the full parameters (12 per link), and the solver's report."""
+    extras), the full parameters (12 per link, or None) and the solver's report
+    (:func:`~._conic.solve`)."""
 
     values: np.ndarray
     full_params: np.ndarray | None
-    solver: str
-    status: str
-    iterations: int
-    seconds: float
+    report: dict
 
 
 def _inertial_params(J):
@@ -75,9 +75,8 @@ def _programme(n_joints: int, dim: int, n_extra: int, nonneg: tuple[int, ...],
                bodies: tuple[int, ...] = ()):
     """The semidefinite programme of :func:`fit_physical` for one shape of model, with the
     data, the prior and its weight as cvxpy parameters (a DPP problem): cvxpy then
-    canonicalises it once, and later solves only put in new numbers (4-7x faster on the
-    KUKA LWR4+'s 64-column model, 0.04 s against 0.15-0.30 s a solve, where the
-    canonicalisation took 90 % of the time). The cached problem's parameters are shared:
+    canonicalises it once, and later solves only put in new numbers. The cached
+    problem's parameters are shared:
     fits of one model shape from several threads at once would race (one process, one
     fit at a time, as every caller here does).
     Returns ``(problem, parameters dict, full parameters p, extras or None)``."""
@@ -116,8 +115,7 @@ def _programme(n_joints: int, dim: int, n_extra: int, nonneg: tuple[int, ...],
 
 
 def fit_physical(model: TorqueModel, factor: Factorization, prior: Float[ArrayLike, " p"],
-                 prior_weight: float = 0.0,
-                 prior_strength: float = 0.0) -> PhysicalFit:
+                 prior_weight: float = 0.0, prior_strength: float = 0.0) -> PhysicalFit:
     """Physically consistent least squares (see the module docstring) for ``model``, on the
     data factored in ``factor`` (``factorize(W, b)`` of the weighted stacked regressor and
     torques); ``prior`` the full a-priori parameters (12 per link). The pull to the prior
@@ -125,8 +123,6 @@ def fit_physical(model: TorqueModel, factor: Factorization, prior: Float[ArrayLi
     ``prior_strength`` is scale-free (the same value means the same balance for any
     weighting, robot or number of samples), which is what validation chooses
     (:func:`~sedsabso_jax.choose_prior_strength`)."""
-    import cvxpy as cp
-
     n = model.robot.n_joints
     d_full = N_LINK_PARAMETERS * n
     n_extra = model.dim - model.base.rank
@@ -144,31 +140,16 @@ def fit_physical(model: TorqueModel, factor: Factorization, prior: Float[ArrayLi
     if body.size % 10 or np.any(body[::10] + 9 != body[9::10]):
         raise ValueError("a body's columns must be 10 in a row (a term's every column)")
     t0 = time.perf_counter()
-    try:
-        problem, values, p, extras = _programme(n, model.dim, n_extra, nonneg,
-                                                tuple(int(k) for k in body[::10]))
-        values["M"].value = M / scale
-        values["c"].value = factor.c / scale
-        values["root_lam"].value = np.sqrt(lam) / scale
-        values["pulled"].value = np.sqrt(lam) / scale * np.asarray(prior, dtype=float)
-        problem.solve(solver=cp.CLARABEL)
-    except cp.error.SolverError as err:
-        raise RuntimeError(f"physically consistent fit: the conic solver failed: {err}") from None
-    seconds = time.perf_counter() - t0
-    if problem.status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
-        raise RuntimeError(f"physically consistent fit: Clarabel ended with status "
-                           f"{problem.status!r}; no consistent parameters were found")
-    if problem.status == cp.OPTIMAL_INACCURATE:
-        warnings.warn("physically consistent fit: Clarabel reached its iteration limit or "
-                      "stalled (status 'optimal_inaccurate'); the parameters are feasible but "
-                      "may be off the optimum", stacklevel=3)
+    problem, values, p, extras = _programme(n, model.dim, n_extra, nonneg,
+                                            tuple(int(k) for k in body[::10]))
+    values["M"].value = M / scale
+    values["c"].value = factor.c / scale
+    values["root_lam"].value = np.sqrt(lam) / scale
+    values["pulled"].value = np.sqrt(lam) / scale * np.asarray(prior, dtype=float)
+    report = solve(problem, WHAT, NONE_FOUND, started=t0)
     full = np.asarray(p.value, dtype=float)
     extra_values = np.asarray(extras.value, dtype=float) if extras is not None else np.zeros(0)
-    values_out = np.concatenate([K @ full, extra_values])
-    stats = problem.solver_stats
-    return PhysicalFit(values=values_out, full_params=full, solver="Clarabel (cvxpy)",
-                       status=str(problem.status), iterations=int(stats.num_iters or 0),
-                       seconds=seconds)
+    return PhysicalFit(np.concatenate([K @ full, extra_values]), full, report)
 
 
 @functools.lru_cache(maxsize=32)
@@ -206,8 +187,6 @@ def fit_bodies(model: TorqueModel, factor: Factorization) -> PhysicalFit:
     finite. Where the unconstrained solution already meets the constraints it is the
     constrained optimum, and is returned as it is. ``full_params`` is None (no full link
     parameters)."""
-    import cvxpy as cp
-
     rank = model.base.rank
     M = factor.R @ np.eye(model.dim)[factor.perm]
     scale = max(float(np.linalg.norm(factor.c)), 1e-300)
@@ -220,23 +199,13 @@ def fit_bodies(model: TorqueModel, factor: Factorization) -> PhysicalFit:
     if np.all(extras[list(nonneg)] >= 0) and all(
             np.linalg.eigvalsh(pseudo_inertia(extras[k:k + 10])).min() >= PSD_MARGIN
             for k in body[::10]):
-        return PhysicalFit(free, None, "none (the least-squares solution is consistent)",
-                           "optimal", 0, time.perf_counter() - t0)
-    try:
-        problem, values, x = _bodies_programme(model.dim, rank, nonneg,
-                                               tuple(int(k) for k in body[::10]))
-        values["M"].value = M / scale
-        values["c"].value = factor.c / scale
-        values["root_ridge"].value = np.sqrt(ridge) / scale
-        values["pulled"].value = np.sqrt(ridge) / scale * free
-        problem.solve(solver=cp.CLARABEL)
-    except cp.error.SolverError as err:
-        raise RuntimeError(f"physically consistent fit: the conic solver failed: {err}") from None
-    if problem.status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
-        raise RuntimeError(f"physically consistent fit: Clarabel ended with status "
-                           f"{problem.status!r}; no consistent parameters were found")
-    stats = problem.solver_stats
-    return PhysicalFit(values=np.asarray(x.value, dtype=float), full_params=None,
-                       solver="Clarabel (cvxpy)", status=str(problem.status),
-                       iterations=int(stats.num_iters or 0),
-                       seconds=time.perf_counter() - t0)
+        return PhysicalFit(free, None, {"solver": NOT_SOLVED, "status": "optimal",
+                                        "iterations": 0, "seconds": time.perf_counter() - t0})
+    problem, values, x = _bodies_programme(model.dim, rank, nonneg,
+                                           tuple(int(k) for k in body[::10]))
+    values["M"].value = M / scale
+    values["c"].value = factor.c / scale
+    values["root_ridge"].value = np.sqrt(ridge) / scale
+    values["pulled"].value = np.sqrt(ridge) / scale * free
+    report = solve(problem, WHAT, NONE_FOUND, started=t0)
+    return PhysicalFit(np.asarray(x.value, dtype=float), None, report)

@@ -38,9 +38,9 @@ from .._data_checks import check_fit_data, pulled
 from .._metrics import nrms_over_limits
 from .._model._checks import model_of, regrouped_message
 from .._model._torque_model import TorqueModel
-from .._recordings import Data, is_several, recordings_of, stacked
+from .._recordings import Data
 from ._fit import fit as fit_model
-from ._samples import Samples
+from ._samples import recorded
 from ._uncertainty import parameter_std, relative_std_percent, searched_std
 
 
@@ -180,22 +180,20 @@ def identified(robot: Robot, data: Data, estimator: Estimator, model: TorqueMode
     model = model_of(robot, model)
     limits = per_joint("limits", limits, robot.n_joints)
     estimator.check(model, limits)  # what can be checked before any data are read
-    recordings = recordings_of(robot, data)
+    recordings, samples = recorded(robot, data)
     model.check_recordings(len(recordings))
     if check:
         check_fit_data(robot, recordings, model.dim, model.base, limits,
                        regularized=pulled(estimator))
     if model.regrouped:
         warnings.warn(regrouped_message(model), stacklevel=caller_stacklevel())
-    q, qd, qdd, tau, index = stacked(recordings)
-    samples = Samples(q, qd, qdd, tau, index if is_several(data) else None)
     t0 = time.perf_counter()
     fitted = fit_model(estimator, model, samples, limits)
     model, out = fitted.model, fitted.fit
     Y = samples.rows(model)  # (T, n, d)
     run_s = time.perf_counter() - t0
 
-    x = out.x
+    x, tau = out.x, samples.tau
     factor0 = out.factor0 if out.factor0 is not None else factorize(
         Y.reshape(-1, Y.shape[-1]), tau.reshape(-1))
     rms = np.sqrt(np.mean((Y @ x - tau) ** 2, axis=0))

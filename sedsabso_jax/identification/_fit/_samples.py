@@ -13,7 +13,8 @@ from ...dynamics._robot import Robot
 from .._estimators._estimator import FitProblem
 from .._estimators._normal_equations import NormalEquations
 from .._model._torque_model import TorqueModel
-from .._recordings import Data, recordings_of, stacked
+from ...measurements._container import Measurements
+from .._recordings import Data, is_several, recordings_of, stacked
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -40,11 +41,8 @@ class Samples:
 
     @classmethod
     def of(cls, robot: Robot, data: Data) -> Samples:
-        """The samples of ``data`` (:data:`~.._recordings.Data`), the recordings stacked,
-        each sample's recording kept where there are several."""
-        recordings = recordings_of(robot, data)
-        q, qd, qdd, tau, index = stacked(recordings)
-        return cls(q, qd, qdd, tau, index if len(recordings) > 1 else None)
+        """The samples of ``data`` (:func:`recorded`)."""
+        return recorded(robot, data)[1]
 
     def kept(self, kind: Any, owner: Any, make) -> Any:
         """``make()``, kept on these samples per (``kind``, ``owner``); ``owner`` is kept
@@ -141,3 +139,14 @@ class Samples:
         if values.shape != (model.dim,):
             raise ValueError(f"values must have shape ({model.dim},), got {values.shape}")
         return self.rows(model.reading(values, only=lambda term: term.waiting)) @ values
+
+
+def recorded(robot: Robot, data: Data) -> tuple[list[Measurements], Samples]:
+    """The one normalisation of the data every fit reads: ``data``
+    (:data:`~.._recordings.Data`) as checked recordings of ``robot``
+    (:func:`~.._recordings.recordings_of`) and their samples stacked, each sample's
+    recording kept where ``data`` is several recordings
+    (:func:`~.._recordings.is_several`; else None). Returns ``(recordings, samples)``."""
+    recordings = recordings_of(robot, data)
+    q, qd, qdd, tau, index = stacked(recordings)
+    return recordings, Samples(q, qd, qdd, tau, index if is_several(data) else None)

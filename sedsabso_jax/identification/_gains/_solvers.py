@@ -28,13 +28,13 @@ from __future__ import annotations
 
 import abc
 import dataclasses
-import time
 from typing import ClassVar
 
 import equinox as eqx
 import numpy as np
 
 from ...dynamics._inertia import pseudo_inertia
+from .._estimators._conic import NOT_SOLVED, solve
 from .._estimators._physical import PSD_MARGIN, RIDGE
 from .._fit._uncertainty import RANK_TOLERANCE
 from .._payload._least_squares import LinearFit, pseudo_inertia_map
@@ -123,8 +123,7 @@ def physical(eq: GainEquations, fit: LinearFit) -> tuple[np.ndarray, dict]:
               if int(c) in position]
     if np.all(fit.x[nonneg] >= 0) and np.linalg.eigvalsh(
             pseudo_inertia(S @ fit.x + s0)).min() >= PSD_MARGIN:
-        return fit.x, {"solver": "none (the least-squares solution is consistent)",
-                       "status": "optimal"}
+        return fit.x, {"solver": NOT_SOLVED, "status": "optimal"}
     scale = fit.scale
     M = fit.s[:, None] * fit.Vt  # ||W theta - b||^2 = ||M (scale theta) - U^T b||^2 + const
     norm = max(float(np.linalg.norm(fit.Ub)), 1e-300)
@@ -140,18 +139,8 @@ def physical(eq: GainEquations, fit: LinearFit) -> tuple[np.ndarray, dict]:
     objective = cp.norm(cp.hstack([(M @ xs - fit.Ub) / norm,
                                    ridge * (xs - fit.x * scale) / norm]), 2)
     problem = cp.Problem(cp.Minimize(objective), constraints)
-    t0 = time.perf_counter()
-    try:
-        problem.solve(solver=cp.CLARABEL)
-    except cp.error.SolverError as err:
-        raise RuntimeError(f"drive gains: the conic solver failed: {err}") from None
-    if problem.status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
-        raise RuntimeError(f"drive gains: Clarabel ended with status {problem.status!r}; no "
-                           f"consistent payload of the given mass was found")
-    return np.asarray(xs.value, dtype=float) / scale, {
-        "solver": "Clarabel (cvxpy)", "status": str(problem.status),
-        "iterations": int(problem.solver_stats.num_iters or 0),
-        "seconds": time.perf_counter() - t0}
+    report = solve(problem, "drive gains", "no consistent payload of the given mass was found")
+    return np.asarray(xs.value, dtype=float) / scale, report
 
 
 class AbstractGainMethod(eqx.Module):

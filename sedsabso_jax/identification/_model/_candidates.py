@@ -8,23 +8,16 @@ from collections.abc import Iterable
 from ...dynamics._base_parameters import BaseParameters, base_parameters
 from ...dynamics._robot import Robot
 from ...measurements._transmission import TransmissionLike, coupled_motors
-from ._actuators import Armature, CoupledMotorFriction
+from .._default._policy import DEFAULT
+from ._actuators import CoupledMotorFriction
 from ._friction import SmoothCoulomb
-from ._load import LoadFriction
 from ._offset import Offset
 from ._term import AbstractTerm
 from ._torque_model import TorqueModel
 
-#: The candidate torque models of :func:`~sedsabso_jax.select_model` (terms beyond the
-#: base regressor's viscous and Coulomb friction), simplest first: Coulomb friction
-#: without the jump at rest in each (with velocities derived from noisy positions,
-#: ``sign(qd)`` flips at random on a joint that stands still), then a torque offset,
-#: armature and Coulomb friction growing with the load (docs/results/extrapolation.md
-#: has the study behind the choice).
-FRICTION_CANDIDATES: tuple[tuple[AbstractTerm, ...], ...] = (
-    (SmoothCoulomb(),), (Offset(), SmoothCoulomb()), (Offset(), Armature(), SmoothCoulomb()),
-    (Offset(), SmoothCoulomb(), LoadFriction()),
-    (Offset(), Armature(), SmoothCoulomb(), LoadFriction()))
+#: The candidate torque models' terms of :func:`~sedsabso_jax.select_model`
+#: (:attr:`~.._default._policy.Default.frictions` of the default).
+FRICTION_CANDIDATES: tuple[tuple[AbstractTerm, ...], ...] = DEFAULT.frictions
 
 
 def candidate_models(robot: Robot,

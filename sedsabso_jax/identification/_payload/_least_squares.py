@@ -30,7 +30,6 @@ estimate, which keeps directions the data leave free finite.
 from __future__ import annotations
 
 import dataclasses
-import time
 
 import numpy as np
 from jaxtyping import Float
@@ -38,6 +37,7 @@ from threadpoolctl import threadpool_limits
 
 from ...dynamics._inertia import from_pseudo_inertia, pseudo_inertia
 from .._estimators._estimator import Sigma, per_joint
+from .._estimators._conic import solve
 from .._estimators._physical import PSD_MARGIN, RIDGE
 from .._fit._uncertainty import NULL_COMPONENT, RANK_TOLERANCE
 
@@ -157,17 +157,7 @@ def consistent(fit: LinearFit, n_robot: int) -> tuple[np.ndarray, dict]:
     objective = cp.norm(cp.hstack([(M @ xs - fit.Ub) / norm,
                                    ridge * (xs - fit.x * scale) / norm]), 2)
     problem = cp.Problem(cp.Minimize(objective), [J - PSD_MARGIN * np.eye(4) >> 0])
-    t0 = time.perf_counter()
-    try:
-        problem.solve(solver=cp.CLARABEL)
-    except cp.error.SolverError as err:
-        raise RuntimeError(f"payload: the conic solver failed: {err}") from None
-    if problem.status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
-        raise RuntimeError(f"payload: Clarabel ended with status {problem.status!r}; no "
-                           f"consistent payload was found")
+    report = solve(problem, "payload", "no consistent payload was found")
     x = np.concatenate([np.asarray(robot.value, dtype=float) / scale[:n_robot]
                         if robot is not None else np.zeros(0), np.asarray(p.value, dtype=float)])
-    report = {"solver": "Clarabel (cvxpy)", "status": str(problem.status),
-              "iterations": int(problem.solver_stats.num_iters or 0),
-              "seconds": time.perf_counter() - t0}
     return x, report

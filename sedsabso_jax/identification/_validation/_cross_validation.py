@@ -13,6 +13,7 @@ from collections.abc import Callable
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from .._default._policy import DEFAULT
 from .._estimators._estimator import Estimator, describe
 from .._fit._fit import fit as fit_model
 from .._fit._samples import Samples
@@ -20,9 +21,11 @@ from .._metrics import Metrics, validation_metrics
 from .._model._torque_model import TorqueModel
 from ._splits import Splits
 
-#: Excess errors below this fraction of the best validated error are ties: a model
-#: is not made more complex for less.
-TIE_FRACTION = 0.01
+#: Excess errors below this fraction of the best validated error are ties
+#: (:attr:`~.._default._policy.Default.tie_fraction`).
+TIE_FRACTION = DEFAULT.tie_fraction
+#: The one-standard-error rule's test (:meth:`~.._default._policy.Default.not_worse`).
+not_worse = DEFAULT.not_worse
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -110,9 +113,8 @@ def cross_validation_of(estimator: Estimator, model: TorqueModel, samples: Sampl
     of the validation that made the splits; ``on_fit()`` after each fit."""
     measured, predicted, scores, tested = [], [], [], []
     every = np.arange(samples.q.shape[0])
-    # many small factorisations: one BLAS thread each (OpenBLAS's threads made the KUKA
-    # LWR4+'s default identify 1.3x slower on 2 idle cores); the user's setting is
-    # restored on leaving
+    # many small factorisations: one BLAS thread each (docs/explanation/
+    # identification-defaults.md); the user's setting is restored on leaving
     with threadpool_limits(limits=1, user_api="blas"):
         if not model.waiting:
             samples.rows(model)  # the splits' rows are taken from the whole's
@@ -133,11 +135,3 @@ def cross_validation_of(estimator: Estimator, model: TorqueModel, samples: Sampl
         validation=validation, split_names=splits.names, split_parts=splits.parts,
         residuals=measured_all - predicted_all, tested=np.concatenate(tested))
 
-
-def not_worse(cv: CrossValidation, best: CrossValidation) -> bool:
-    """Whether ``cv``'s mean excess over ``best``, fold by fold, is at most one standard
-    error of that excess, or below :data:`TIE_FRACTION` of the best error."""
-    excess = cv.fold_scores - best.fold_scores
-    k = len(excess)
-    se = float(np.std(excess, ddof=1) / np.sqrt(k)) if k > 1 else 0.0
-    return float(np.mean(excess)) <= max(se, TIE_FRACTION * best.score)

@@ -3,12 +3,11 @@ unless they validate worse (:class:`KeptTerms`, :data:`KEPT_TERMS`).
 
 Friction at rest (:class:`~.._model._presliding.Presliding`) acts where joints stand
 still and reverse; an excitation recording barely rests, so a validation on it scores a
-model with the term much as one without (on kept-out robots, 0.3-1.9 % apart while the
-error on motions that rest fell by up to 19 %), and the one-standard-error rule, which
-prefers fewer parameters, drops it. Every real drive has friction at rest, so the
-default reverses the burden of proof for it: the term is added to the model
-:func:`~._selection.select_model` chose (same estimator), and kept unless its
-validation is worse than the chosen model's by more than the rule's margin
+model with the term much as one without, and the one-standard-error rule, which prefers
+fewer parameters, drops it (docs/explanation/identification-defaults.md). Every real
+drive has friction at rest, so the default reverses the burden of proof for it: the term
+is added to the model :func:`~._selection.select_model` chose (same estimator), and kept
+unless its validation is worse than the chosen model's by more than the rule's margin
 (:func:`~._cross_validation.not_worse`: the split-by-split excess above one standard
 error and above :data:`~._cross_validation.TIE_FRACTION`). Where the data do show that
 the term hurts, as with a plant whose joints hold nothing at rest and a model whose
@@ -21,7 +20,7 @@ from collections.abc import Sequence
 
 import equinox as eqx
 
-from .._model._presliding import LARGEST_AT_REST, Presliding
+from .._default._policy import DEFAULT
 from .._model._term import AbstractTerm
 from .._model._torque_model import TorqueModel
 from ._cross_validation import CrossValidation, not_worse
@@ -70,7 +69,6 @@ class KeptTerms(eqx.Module):
         return min(fine, key=lambda i: tried[i].score) if fine else None
 
 
-#: What :func:`~sedsabso_jax.select_and_identify` adds to its choice by default:
-#: friction at rest with its displacements searched up to
-#: :data:`~.._model._presliding.LARGEST_AT_REST` (docs/results/extrapolation.md).
-KEPT_TERMS = KeptTerms(((Presliding(fitted=True, largest=LARGEST_AT_REST),),))
+#: What :func:`~sedsabso_jax.select_and_identify` adds to its choice by default
+#: (:attr:`~.._default._policy.Default.kept_terms`).
+KEPT_TERMS = KeptTerms(DEFAULT.kept_terms)

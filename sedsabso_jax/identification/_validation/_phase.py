@@ -7,10 +7,13 @@ from __future__ import annotations
 import numpy as np
 from jaxtyping import ArrayLike, Float, Int
 
-#: Folds of :func:`~._selection.cross_validate` unless told otherwise.
-DEFAULT_FOLDS = 5
-#: A lag whose normalised autocorrelation reaches this is a repeat of the motion.
-REPEAT_CORRELATION = 0.95
+from .._default._policy import DEFAULT
+
+#: Folds of :func:`~._selection.cross_validate` unless told otherwise, and the
+#: autocorrelation of a repeat of the motion (the default's,
+#: :class:`~.._default._policy.Default`).
+DEFAULT_FOLDS = DEFAULT.folds
+REPEAT_CORRELATION = DEFAULT.repeat_correlation
 
 
 def repeat_period(times: Float[ArrayLike, " T"], q: Float[ArrayLike, "T n"], *,

@@ -1,7 +1,7 @@
-"""A validation's progress in estimated seconds (:mod:`.._work`), not in fits: the
-seconds of each split's fit known before it runs (:func:`split_seconds`), of a grid of
-candidates (:func:`grid_seconds`) and of the kept terms (:func:`kept_seconds`), added
-up as the fits end (:class:`Fits`)."""
+"""A call's progress in estimated seconds (:mod:`.._work`), not in fits: the seconds of
+each split's fit known before it runs (:func:`split_seconds`), of a grid of candidates
+(:func:`grid_seconds`) and of the kept terms (:func:`kept_seconds`), added up as the
+work ends by the one counter of a call (:class:`Fits`)."""
 
 from __future__ import annotations
 
@@ -17,11 +17,30 @@ from ._splits import Splits
 
 
 class Fits:
-    """Adds up the fits' estimated seconds for ``progress(label, done, total)`` (None:
-    nothing); ``total`` is revised where the fits ahead become known."""
+    """The one counter of a call's progress: adds up the estimated seconds of the work
+    done for ``progress(label, done, total)`` (None: nothing), ``total`` the work done,
+    the work known ahead (:meth:`ahead`, revised as choices are made) and ``later``
+    seconds after it (the stages of :func:`~sedsabso_jax.select_and_identify` after a
+    validation's)."""
 
-    def __init__(self, progress: ProgressCallback | None, total: float):
-        self.progress, self.total, self.done = progress, total, 0.0
+    def __init__(self, progress: ProgressCallback | None, later: float = 0.0):
+        self.progress, self.later, self.done, self.total = progress, later, 0.0, later
+
+    @classmethod
+    def of(cls, progress: ProgressCallback | Fits | None) -> Fits:
+        """``progress`` as a counter: a :class:`Fits` as it is (a stage of a call)."""
+        return progress if isinstance(progress, Fits) else cls(progress)
+
+    def ahead(self, seconds: float) -> None:
+        """The work known ahead is ``seconds`` (then ``later``)."""
+        self.total = self.done + seconds + self.later
+
+    def step(self, label: str, seconds: float, later: float) -> None:
+        """A step of ``seconds`` done, with ``later`` seconds after it."""
+        self.done += seconds
+        self.later, self.total = later, self.done + later
+        if self.progress is not None:
+            self.progress(label, self.done, self.total)
 
     def after(self, label: str, seconds: Sequence[float]) -> Callable[[], None] | None:
         """The ``on_fit`` of :func:`~._cross_validation.cross_validation_of` for fits

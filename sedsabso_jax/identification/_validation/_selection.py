@@ -1,53 +1,31 @@
-"""Judging an identification on samples it was not fitted to, and choosing a model by it.
+"""Judging an identification on samples it was not fitted to, and choosing by it.
 
 A :class:`~._splits.Validation` cuts the data into splits, each a set of samples to fit
-and a set to predict. Two kinds answer two questions:
-
-- **phase folds** (:class:`~._splits.PhaseFolds`): a recording of an excitation trajectory
-  usually repeats its motion (the KUKA LWR4+ runs hold two periods of one trajectory, the
-  Panda's one and a half), so a contiguous block held out of one period is fitted in the
-  other and contiguous-block cross-validation measures repeatability. Phase folds are
-  stretches of the trajectory's PHASE (:func:`~._phase.phase_folds`: the repeat period is found
-  from the positions' autocorrelation, fold ``k`` holds every sample whose phase lies in
-  ``[k/K, (k+1)/K)``; a recording that does not repeat has phase = time). They predict the
-  error on motions like the fitted one: the model only ever interpolates.
-- **speed splits** (:class:`~._splits.SpeedSplits`, the default of
-  :func:`~sedsabso_jax.select_and_identify`): each joint's fast samples predicted by a fit to its
-  slow ones, as a new, faster motion asks the model to extrapolate (friction at speeds
-  never fitted). Leave one recording out (:class:`~._splits.RecordingFolds`) where there
-  are several.
-
-:func:`cross_validate` fits and predicts every split; the predictions are compared with
-the measured torques (NRMS over the torque limits where they are known, else the relative
-RMS), one score per split, their mean the validated error. :func:`select_model` validates
-a grid of torque models and estimators and keeps the simplest that is not worse than the
-best by more than one standard error (the one-standard-error rule: Hastie, Tibshirani &
-Friedman, *The Elements of Statistical Learning*, 2009, Sec. 7.10), with the standard
-error taken of the PAIRED split-by-split differences to the best: the splits differ in
-difficulty far more than the models do, and that common part cancels in the differences
-(unpaired, the rule once kept a model without the torque offset whose error was higher on
-every fold of the KUKA LWR4+ data). Excesses below 1 % of the best error
-(:data:`TIE_FRACTION`) count as ties, so a model is not made more complex for a gain no
-one could use; simpler is fewer parameters, then physically consistent, then the earlier
-estimator. Nothing here looks at held-out files: they are for judging the choice, never
-for making it.
-
-Each takes the data as :func:`~sedsabso_jax.identify` does, estimator objects, built
-torque models (:class:`~sedsabso_jax.TorqueModel`) and a validation object (default
-``PhaseFolds()``).
+and one to predict: phase folds (:class:`~._splits.PhaseFolds`, the model interpolates),
+speed splits (:class:`~._splits.SpeedSplits`, it extrapolates in speed), leave one
+recording out (:class:`~._splits.RecordingFolds`), or several pooled.
+:func:`cross_validate` fits and predicts every split (one score per split: NRMS over the
+torque limits where known, else the relative RMS; their mean the validated error);
+:func:`select_model` validates a grid of torque models and estimators and keeps the
+simplest not worse than the best by the one-standard-error rule of the paired
+split-by-split differences (:meth:`~.._default._policy.Default.not_worse`, with ties below
+:data:`TIE_FRACTION`); :func:`choose_prior_strength` keeps the strongest pull to the prior
+the rule allows. Held-out files are never read here. Why: docs/explanation/
+identification-defaults.md.
 """
 
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from typing import cast
 
 import numpy as np
 
 from ...dynamics._robot import Robot
 from ...measurements._container import Measurements
+from .._default._policy import DEFAULT
 from .._estimators._estimator import (
     Estimator,
     Limits,
@@ -55,13 +33,13 @@ from .._estimators._estimator import (
     checked_estimator,
     per_joint,
 )
-from .._estimators._least_squares import OLS, WLS, PhysicallyConsistent
-from .._fit._samples import Samples
+from .._estimators._least_squares import OLS, PhysicallyConsistent
+from .._fit._samples import Samples, recorded
 from .._model._candidates import candidate_models
 from .._model._checks import model_of
 from .._model._torque_model import TorqueModel
 from .._options import one_or_more
-from .._recordings import Data, recordings_of, stacked
+from .._recordings import Data
 from .._work import parts
 from ._cross_validation import TIE_FRACTION as TIE_FRACTION
 from ._cross_validation import CrossValidation as CrossValidation
@@ -71,11 +49,11 @@ from ._phase import DEFAULT_FOLDS as DEFAULT_FOLDS
 from ._progress import Fits, grid_seconds, kept_seconds, split_seconds, train_rows
 from ._splits import PhaseFolds, Splits, Validation
 
-#: The candidate estimators of :func:`select_model` (their weightings), simplest first.
-ESTIMATOR_CANDIDATES = (OLS(), WLS("residual"), WLS("limits"))
-#: The candidate pulls of a physically consistent fit toward the a-priori parameters
-#: (:func:`choose_prior_strength`; multiples of the data term's mean curvature), none first.
-PRIOR_STRENGTHS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)
+#: The candidate estimators of :func:`select_model` and the pulls toward the a-priori
+#: parameters of :func:`choose_prior_strength` (the default's,
+#: :class:`~.._default._policy.Default`).
+ESTIMATOR_CANDIDATES = DEFAULT.estimators
+PRIOR_STRENGTHS = DEFAULT.prior_strengths
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -94,10 +72,8 @@ class Prepared:
             raise TypeError(f"validation must be a Validation (PhaseFolds(), SpeedSplits(), "
                             f"RecordingFolds(), GivenFolds(labels), Pooled(...)), got "
                             f"{validation!r}")
-        recordings = recordings_of(robot, data)
-        q, qd, qdd, tau, index = stacked(recordings)
-        return cls(recordings, Samples(q, qd, qdd, tau, index), validation.splits(recordings),
-                   validation)
+        recordings, samples = recorded(robot, data)
+        return cls(recordings, samples, validation.splits(recordings), validation)
 
     def validate(self, estimator: Estimator, model: TorqueModel, limits: np.ndarray | None,
                  on_fit: Callable[[], None] | None = None) -> CrossValidation:
@@ -110,7 +86,7 @@ class Prepared:
 def cross_validate(robot: Robot, data: Data, estimator: Estimator = OLS(),
                    model: TorqueModel | None = None, *,
                    validation: Validation = PhaseFolds(), limits: Limits = None,
-                   progress: ProgressCallback | None = None) -> CrossValidation:
+                   progress: ProgressCallback | Fits | None = None) -> CrossValidation:
     """Validate :func:`~sedsabso_jax.identify` ``(robot, data, estimator, model)``: fit each
     split of ``validation`` (a :class:`~._splits.Validation`; default
     :data:`DEFAULT_FOLDS` phase folds) and predict it. ``data``: one recording or several
@@ -123,7 +99,8 @@ def cross_validate(robot: Robot, data: Data, estimator: Estimator = OLS(),
     checked_estimator(estimator).check(model, limits)
     each = split_seconds(train_rows(prepared.samples, prepared.splits), estimator, model,
                          parts(estimator, model))
-    fits = Fits(progress, sum(each))
+    fits = Fits.of(progress)
+    fits.ahead(sum(each))
     return prepared.validate(estimator, model, limits,
                              fits.after(f"{estimator.name}, {model.friction}", each))
 
@@ -191,16 +168,9 @@ class Selection:
                                for s, cv in self.candidates]}
 
 
-def simplest_not_worse(scores: Sequence[CrossValidation], physical: Sequence[bool]) -> int:
-    """The index of the candidate the one-standard-error rule picks among ``scores``
-    (each candidate's validation, ``physical`` whether its fit is physically
-    consistent): the simplest, fewest parameters, then physically consistent, then the
-    earlier, of those not worse than the lowest-scoring one
-    (:func:`~._cross_validation.not_worse`)."""
-    best = min(scores, key=lambda cv: cv.score)
-    order = sorted(range(len(scores)), key=lambda i: (scores[i].n_parameters,
-                                                      not physical[i], i))
-    return next(i for i in order if not_worse(scores[i], best))
+#: The index of the candidate the one-standard-error rule picks among validations
+#: ``(scores, physical)`` (:meth:`~.._default._policy.Default.simplest`).
+simplest_not_worse = DEFAULT.simplest
 
 
 def select_model(robot: Robot, data: Data, *,
@@ -208,7 +178,7 @@ def select_model(robot: Robot, data: Data, *,
                  estimators: Estimator | Iterable[Estimator] | None = None,
                  validation: Validation = PhaseFolds(), limits: Limits = None,
                  kept: KeptTerms | None = None,
-                 progress: ProgressCallback | None = None) -> Selection:
+                 progress: ProgressCallback | Fits | None = None) -> Selection:
     """Choose the torque model and the estimator by validation (module docstring).
 
     ``models`` (default :func:`~sedsabso_jax.identification.candidate_models` of the robot: its
@@ -237,7 +207,8 @@ def select_model(robot: Robot, data: Data, *,
     grid = [(estimator, model) for model in models for estimator in estimators]
     rows = train_rows(prepared.samples, prepared.splits)
     each, seen = grid_seconds(rows, grid), set().union(*(parts(e, m) for e, m in grid))
-    fits = Fits(progress, sum(map(sum, each)) + (0.0 if kept is None else max(
+    fits = Fits.of(progress)
+    fits.ahead(sum(map(sum, each)) + (0.0 if kept is None else max(
         sum(map(sum, kept_seconds(rows, kept, e, models[-1], seen))) for e in estimators)))
     tried, options = [], []
     for (estimator, model), seconds in zip(grid, each):
@@ -264,7 +235,7 @@ def _with_kept(kept: KeptTerms, index: int, tried: list, options: list,
     estimator, model = options[index]
     each = kept_seconds(train_rows(prepared.samples, prepared.splits), kept, estimator,
                         model, set().union(*(parts(e, m) for e, m in options)))
-    fits.total = fits.done + sum(map(sum, each))
+    fits.ahead(sum(map(sum, each)))
     found = []
     for with_terms, seconds in zip(kept.models(model), each):
         checked_estimator(estimator).check(with_terms, limits)
@@ -318,7 +289,7 @@ def choose_prior_strength(robot: Robot, data: Data,
                           model: TorqueModel | None = None, *,
                           strengths: Iterable[float] = PRIOR_STRENGTHS,
                           validation: Validation = PhaseFolds(), limits: Limits = None,
-                          progress: ProgressCallback | None = None) -> PriorSelection:
+                          progress: ProgressCallback | Fits | None = None) -> PriorSelection:
     """Choose how strongly a physically consistent fit is pulled toward the a-priori
     parameters (``prior_strength`` of :class:`~sedsabso_jax.PhysicallyConsistent`; an
     ``OLS`` or ``WLS`` ``estimator`` is made physically consistent) by ``validation``
@@ -338,7 +309,8 @@ def choose_prior_strength(robot: Robot, data: Data,
     estimator.check(model, limits)
     tried, estimators = [], []
     each = split_seconds(train_rows(prepared.samples, prepared.splits), estimator, model)
-    fits = Fits(progress, sum(each) * len(strengths))
+    fits = Fits.of(progress)
+    fits.ahead(sum(each) * len(strengths))
     for v in strengths:
         estimators.append(dataclasses.replace(estimator, prior_strength=v))
         tried.append((v, prepared.validate(estimators[-1], model, limits,

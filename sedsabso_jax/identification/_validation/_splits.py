@@ -34,15 +34,15 @@ import numpy as np
 from jaxtyping import ArrayLike, Int
 
 from ...measurements._container import Measurements
+from .._default._policy import DEFAULT
 from .._options import as_float
 from ._phase import DEFAULT_FOLDS, phase_folds
 
-#: :class:`SpeedSplits`' default thresholds, as fractions of each joint's peak speed
-#: (its 99.5 % quantile of ``|qd|``).
-FIT_BELOW, PREDICT_ABOVE = 0.7, 0.8
-#: The quantile of ``|qd|`` that :class:`SpeedSplits` calls a joint's peak speed (robust
-#: to a spike of the derived velocity).
-PEAK_QUANTILE = 0.995
+#: :class:`SpeedSplits`' default thresholds, as fractions of each joint's peak speed, and
+#: the quantile of ``|qd|`` called its peak (the default's,
+#: :class:`~.._default._policy.Default`).
+FIT_BELOW, PREDICT_ABOVE = DEFAULT.fit_below, DEFAULT.predict_above
+PEAK_QUANTILE = DEFAULT.peak_quantile
 
 
 def peak_speed(qd: np.ndarray) -> np.ndarray:
