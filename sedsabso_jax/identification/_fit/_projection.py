@@ -27,6 +27,7 @@ any search method.
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import equinox as eqx
 import jax
@@ -35,8 +36,9 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._model._term import Signals, diagonal
-from .._model._torque_model import TorqueModel
+from .._model._torque_model import TorqueModel, tree_key
 from .._recordings import Data
+from .._search._problem import fitness
 from ._samples import Samples
 
 #: Tikhonov term of the normal equations, relative to their largest diagonal entry (the
@@ -66,16 +68,17 @@ class Recipe:
     moved_columns: int
     rows: tuple[tuple[int, tuple[int, ...]], ...]
 
-    @property
+    @functools.cached_property
     def key(self) -> tuple:
-        """What the compiled code reads of the model: its base, recordings and
+        """What the compiled code reads of the model, by structure and values
+        (:func:`~.._model._torque_model.tree_key`): its base, recordings and
         transmission, the terms it computes and those that shape the Coulomb columns."""
         m = self.model
         shaping = tuple(t for t in m.terms if t.coulomb(np.zeros((1, m.robot.n_joints)))
                         is not None)
-        return (id(m.base), m.recordings, None if m.transmission is None
-                else m.transmission.tobytes(), tuple(m.terms[i] for i in self.terms),
-                shaping, self.coulomb, self.pair_column, self.pair_joint, self.moved_columns,
+        return (tree_key((m.base, m.recordings, m.transmission,
+                          tuple(m.terms[i] for i in self.terms), shaping)),
+                self.coulomb, self.pair_column, self.pair_joint, self.moved_columns,
                 self.rows)
 
     def __hash__(self) -> int:
@@ -232,12 +235,9 @@ class Projection(eqx.Module):
         y, g, _, _, _ = self._reduced(u)
         return (self.floor - y @ g) / self.rows
 
-    @staticmethod
-    def fitness(u: Float[Array, " k"], problem: Projection) -> Float[Array, ""]:
-        """:meth:`loss` as a fitness ``f(u, args)`` whose ``args`` is the problem, for
-        :func:`~sedsabso_jax.minimise` (``args=problem``: the problem's arrays are the
-        compiled run's arguments, not constants baked into it)."""
-        return problem.loss(u)
+    #: :meth:`loss` as a fitness ``f(u, args)`` for :func:`~sedsabso_jax.minimise`
+    #: (``args=problem``): the searches' one wrapper, :func:`~.._search._problem.fitness`.
+    fitness = staticmethod(fitness)
 
     def residual(self, u: Float[Array, " k"]) -> Float[Array, " N"]:
         """The weighted residual ``(T n,)`` at ``u``, the linear values solved (zero on
