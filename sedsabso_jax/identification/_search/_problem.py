@@ -26,7 +26,7 @@ class SearchProblem(Protocol):
         ...
 
 
-def fitness(u: Float[Array, " k"], problem: SearchProblem) -> Float[Array, ""]:
+def fitness(u, problem: SearchProblem):
     """The problem's loss at ``u`` as a fitness ``f(u, args)`` whose ``args`` is the
     problem: the one wrapper every search evaluates (:func:`losses`,
     :func:`~sedsabso_jax.minimise` with ``args=problem``: the problem's arrays are the
