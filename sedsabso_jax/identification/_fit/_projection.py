@@ -127,17 +127,23 @@ class Projection(eqx.Module):
         if weights.shape != (n,) or not np.all(np.isfinite(weights) & (weights > 0)):
             raise ValueError(f"weights must be {n} finite numbers > 0, got {weights!r}")
         samples = data if isinstance(data, Samples) else Samples.of(model.robot, data)
+        root = samples.root
+        T = root.q.shape[0]
+        # the samples fitted, a mask over the whole recordings' rows
+        index = np.arange(T) if samples.keep is None else np.asarray(samples.keep)
         if keep is not None:
-            samples = samples.subset(np.asarray(keep))
-        return cls._of(model, samples, weights)
+            index = index[np.asarray(keep)]
+        mask = np.zeros(T)
+        mask[index] = 1.0
+        return cls._of(model, root, mask, weights)
 
     @classmethod
-    def _of(cls, model: TorqueModel, samples: Samples, weights: np.ndarray) -> Projection:
+    def _of(cls, model: TorqueModel, root: Samples, mask: np.ndarray, weights: np.ndarray
+            ) -> Projection:
         found = model.nonlinear()
         if not found:
             raise ValueError(f"the torque model {model.friction!r} has no parameters to "
                              f"search")
-        root = samples.root
         # kept for the other splits where the whole's rows of this model are (a model
         # the validation fits unchanged on every split)
         Y0 = root.rows(model, every_column=True, cache=root.has_rows(model))
@@ -146,9 +152,6 @@ class Projection(eqx.Module):
                                   lambda: _moved(model, root, Y0))
         shared = root.kept(("signals", model.structure), model.base,
                            lambda: _signals(model, root))
-        T = root.q.shape[0]
-        mask = np.zeros(T)
-        mask[np.arange(T) if samples.keep is None else samples.keep] = 1.0
         w = np.asarray(weights, dtype=float)
         A = Y0[..., ~moved] * (w[:, None] * mask[:, None, None])
         M = A.reshape(-1, A.shape[-1])

@@ -101,7 +101,9 @@ class TorqueModel(eqx.Module):
         if not isinstance(self.recordings, (int, np.integer)) or isinstance(
                 self.recordings, bool) or self.recordings < 1:
             raise ValueError(f"recordings must be an integer >= 1, got {self.recordings!r}")
-        if self.recordings > 1 and not any(t.name == "offset" for t in self.terms):
+        if self.recordings > 1 and (self._extra_names()
+                                    == dataclasses.replace(self, recordings=1)._extra_names()):
+            # no term has columns per recording: the model asks no term which kind it is
             raise ValueError("one torque offset per recording needs the Offset() term in the "
                              "torque model")
         if self.transmission is not None:
