@@ -361,9 +361,9 @@ class TorqueModel(eqx.Module):
             k += m
         if k != np.shape(values)[0]:
             raise ValueError(f"expected {k} nonlinear parameters, got {np.shape(values)[0]}")
-        if isinstance(values, jax.core.Tracer):  # a trial inside a compiled search
-            return eqx.tree_at(lambda m: m.terms, self, tuple(terms))
-        return dataclasses.replace(self, terms=tuple(terms))
+        # the terms in their places (each checked itself): floats, or a compiled search's
+        # traced values alike
+        return eqx.tree_at(lambda m: m.terms, self, tuple(terms))
 
     @property
     def waiting(self) -> bool:
