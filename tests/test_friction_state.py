@@ -211,6 +211,11 @@ def test_the_search_problem_is_the_least_squares_fit(plant, friction):
     part = Projection.of(model, samples.subset(keep), w)
     assert float(loss(part, jnp.asarray(u))) == pytest.approx(
         _least_squares_loss(Y[keep], data.tau[keep], w), rel=1e-7)
+    # the split as a mask over the whole recordings, or its indices: the same problem
+    for chosen in (keep, np.flatnonzero(keep)):
+        masked = Projection.of(model, samples, w, keep=chosen)
+        np.testing.assert_array_equal(masked.mask, part.mask)
+        assert float(loss(masked, jnp.asarray(u))) == float(loss(part, jnp.asarray(u)))
     population = jnp.asarray(u + np.random.default_rng(0).normal(0, 0.5, (5, k)))
     np.testing.assert_allclose(eqx.filter_jit(jax.vmap(problem.loss))(population),
                                [loss(problem, p) for p in population], rtol=1e-9)

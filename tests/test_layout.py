@@ -20,6 +20,7 @@ PACKAGE = "sedsabso_jax"
 #: of each other.
 LAYERS = {
     "paper": 0, "_output": 0, "_deprecation": 0, "_version": 0, "_x64": 0, "_lazy": 0,
+    "_terms": 0,
     "dynamics": 1, "optim": 1,
     "measurements": 2, "excitation": 2, "robots": 2, "baselines": 2,
     "identification": 3,

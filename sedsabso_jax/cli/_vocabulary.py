@@ -5,14 +5,15 @@ tests/test_cli_startup.py checks; the library checks them again when a command r
 
 from __future__ import annotations
 
+#: ``identification.FRICTION_TERMS``: the words of ``--friction``'s ``a+b`` text, as
+#: the terms' order declares them (``sedsabso_jax/_terms.py``, which imports nothing).
+from .._terms import FRICTION_TERMS as FRICTION_TERMS
+
 #: ``identification.AUTO``: ``--method``, ``--weights`` and ``--friction`` left to
 #: validation.
 AUTO = "auto"
 #: ``Estimator.registered()``: the names ``identify --method`` takes.
 ESTIMATORS = ("OLS", "WLS", "L1", "LM", "SEDSABSO", "BSO", "LDWPSO")
-#: ``identification.FRICTION_TERMS``: the words of ``--friction``'s ``a+b`` text.
-FRICTION_TERMS = ("viscous-coulomb", "offset", "quadratic", "smooth", "armature", "coupling",
-                  "stribeck", "load", "presliding")
 #: ``identification.FRICTION_CANDIDATES`` as ``--friction`` text.
 FRICTION_CANDIDATES = ("viscous-coulomb+smooth", "viscous-coulomb+offset+smooth",
                        "viscous-coulomb+offset+armature+smooth",

@@ -27,6 +27,7 @@ any search method.
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import equinox as eqx
 import jax
@@ -35,8 +36,9 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._model._term import Signals, diagonal
-from .._model._torque_model import TorqueModel
+from .._model._torque_model import TorqueModel, tree_key
 from .._recordings import Data
+from .._search._problem import fitness
 from ._samples import Samples
 
 #: Tikhonov term of the normal equations, relative to their largest diagonal entry (the
@@ -66,16 +68,17 @@ class Recipe:
     moved_columns: int
     rows: tuple[tuple[int, tuple[int, ...]], ...]
 
-    @property
+    @functools.cached_property
     def key(self) -> tuple:
-        """What the compiled code reads of the model: its base, recordings and
+        """What the compiled code reads of the model, by structure and values
+        (:func:`~.._model._torque_model.tree_key`): its base, recordings and
         transmission, the terms it computes and those that shape the Coulomb columns."""
         m = self.model
         shaping = tuple(t for t in m.terms if t.coulomb(np.zeros((1, m.robot.n_joints)))
                         is not None)
-        return (id(m.base), m.recordings, None if m.transmission is None
-                else m.transmission.tobytes(), tuple(m.terms[i] for i in self.terms),
-                shaping, self.coulomb, self.pair_column, self.pair_joint, self.moved_columns,
+        return (tree_key((m.base, m.recordings, m.transmission,
+                          tuple(m.terms[i] for i in self.terms), shaping)),
+                self.coulomb, self.pair_column, self.pair_joint, self.moved_columns,
                 self.rows)
 
     def __hash__(self) -> int:
@@ -124,17 +127,23 @@ class Projection(eqx.Module):
         if weights.shape != (n,) or not np.all(np.isfinite(weights) & (weights > 0)):
             raise ValueError(f"weights must be {n} finite numbers > 0, got {weights!r}")
         samples = data if isinstance(data, Samples) else Samples.of(model.robot, data)
+        root = samples.root
+        T = root.q.shape[0]
+        # the samples fitted, a mask over the whole recordings' rows
+        index = np.arange(T) if samples.keep is None else np.asarray(samples.keep)
         if keep is not None:
-            samples = samples.subset(np.asarray(keep))
-        return cls._of(model, samples, weights)
+            index = index[np.asarray(keep)]
+        mask = np.zeros(T)
+        mask[index] = 1.0
+        return cls._of(model, root, mask, weights)
 
     @classmethod
-    def _of(cls, model: TorqueModel, samples: Samples, weights: np.ndarray) -> Projection:
+    def _of(cls, model: TorqueModel, root: Samples, mask: np.ndarray, weights: np.ndarray
+            ) -> Projection:
         found = model.nonlinear()
         if not found:
             raise ValueError(f"the torque model {model.friction!r} has no parameters to "
                              f"search")
-        root = samples.root
         # kept for the other splits where the whole's rows of this model are (a model
         # the validation fits unchanged on every split)
         Y0 = root.rows(model, every_column=True, cache=root.has_rows(model))
@@ -143,9 +152,6 @@ class Projection(eqx.Module):
                                   lambda: _moved(model, root, Y0))
         shared = root.kept(("signals", model.structure), model.base,
                            lambda: _signals(model, root))
-        T = root.q.shape[0]
-        mask = np.zeros(T)
-        mask[np.arange(T) if samples.keep is None else samples.keep] = 1.0
         w = np.asarray(weights, dtype=float)
         A = Y0[..., ~moved] * (w[:, None] * mask[:, None, None])
         M = A.reshape(-1, A.shape[-1])
@@ -232,12 +238,9 @@ class Projection(eqx.Module):
         y, g, _, _, _ = self._reduced(u)
         return (self.floor - y @ g) / self.rows
 
-    @staticmethod
-    def fitness(u: Float[Array, " k"], problem: Projection) -> Float[Array, ""]:
-        """:meth:`loss` as a fitness ``f(u, args)`` whose ``args`` is the problem, for
-        :func:`~sedsabso_jax.minimise` (``args=problem``: the problem's arrays are the
-        compiled run's arguments, not constants baked into it)."""
-        return problem.loss(u)
+    #: :meth:`loss` as a fitness ``f(u, args)`` for :func:`~sedsabso_jax.minimise`
+    #: (``args=problem``): the searches' one wrapper, :func:`~.._search._problem.fitness`.
+    fitness = staticmethod(fitness)
 
     def residual(self, u: Float[Array, " k"]) -> Float[Array, " N"]:
         """The weighted residual ``(T n,)`` at ``u``, the linear values solved (zero on

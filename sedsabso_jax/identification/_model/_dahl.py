@@ -44,9 +44,8 @@ from jax import lax
 from jaxtyping import Array, ArrayLike, Bool, Float
 
 #: The backends on which :func:`dahl_state` runs the sequential ``lax.scan`` (the
-#: others: the associative scan). On a 2-core CPU the sequential scan was 3-4 times
-#: faster (``python -m benchmarks.friction_state --population-speed``); on a GPU the
-#: associative scan removes the ``T`` sequential steps.
+#: others: the associative scan, which removes the ``T`` sequential steps; the timings:
+#: docs/how-to/friction-at-rest.md).
 SEQUENTIAL = ("cpu",)
 
 

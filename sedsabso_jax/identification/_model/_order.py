@@ -21,28 +21,35 @@ The base regressor already holds each joint's viscous and Coulomb friction
 
 A term of your own (a final subclass of :class:`~._term.AbstractTerm`, in your own file)
 goes into a model as these do; its columns come after the package's, in the order
-given. The command line knows the words of :data:`TERMS`.
+given. The command line knows the words of :data:`TERMS`, declared one line each in
+``sedsabso_jax/_terms.py`` (:data:`~sedsabso_jax._terms.DECLARED`).
 """
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Iterable
 
-from ._actuators import Armature, CoupledMotorFriction
-from ._friction import Quadratic, SmoothCoulomb, Stribeck
-from ._load import LoadFriction
-from ._offset import Offset
-from ._presliding import Presliding
+from ..._terms import BASE_FRICTION as BASE_FRICTION
+from ..._terms import DECLARED
+from ..._terms import FRICTION_TERMS as FRICTION_TERMS
 from ._term import AbstractTerm
 
+
+def _declared() -> tuple[type[AbstractTerm], ...]:
+    """The classes of :data:`~sedsabso_jax._terms.DECLARED`, each named by its word."""
+    out = []
+    for word, module, name in DECLARED:
+        cls = getattr(importlib.import_module(f".{module}", __package__), name)
+        if not (isinstance(cls, type) and issubclass(cls, AbstractTerm) and cls.name == word):
+            raise TypeError(f"sedsabso_jax/_terms.py declares {word!r} as {module}.{name}, "
+                            f"which is not a term named {word!r}")
+        out.append(cls)
+    return tuple(out)
+
+
 #: The package's terms, in the order of their columns.
-TERMS: tuple[type[AbstractTerm], ...] = (Offset, Quadratic, SmoothCoulomb, Armature,
-                                         CoupledMotorFriction, Stribeck, LoadFriction,
-                                         Presliding)
-#: The rigid-body model's own friction, always in the model (the base regressor's columns).
-BASE_FRICTION = "viscous-coulomb"
-#: The words of ``--friction``'s ``a+b`` text, in column order.
-FRICTION_TERMS = (BASE_FRICTION, *(t.name for t in TERMS))
+TERMS: tuple[type[AbstractTerm], ...] = _declared()
 _NAMED = {t.name: t for t in TERMS}
 
 

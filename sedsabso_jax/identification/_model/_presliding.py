@@ -17,11 +17,9 @@ PRESLIDING_DISPLACEMENT = 0.002
 SCANS = ("auto", "sequential", "associative")
 #: The largest displacement (rad or m) the default's friction at rest searches
 #: (``Presliding(fitted=True, largest=...)``, :data:`~.._validation._kept_terms.KEPT_TERMS`):
-#: presliding is the contacts' small elastic deformation before they slide; searched up
-#: to 0.5 rad, four of the KUKA LWR4+'s seven displacements ended at 100-500 mrad, a slow
-#: hysteresis that missed held-out stretches of its motion by up to 32 % more than the
-#: model without it, while up to 20 mrad it matched or beat that model on each
-#: (docs/explanation/identification-defaults.md).
+#: presliding is the contacts' small elastic deformation before they slide, and the
+#: larger displacements a search finds are a slow hysteresis that predicts held-out
+#: motion worse (the measurements: docs/explanation/identification-defaults.md).
 LARGEST_AT_REST = 0.02
 
 

@@ -10,21 +10,25 @@ from typing import Any
 
 import numpy as np
 
-from ...dynamics._base_parameters import RANK_TOLERANCE, BaseParameters, random_states
+from ...dynamics._base_parameters import RANK_TOLERANCE, random_states
 
-#: Which extra columns a model keeps, per model structure.
-_KEPT: dict[tuple, tuple[BaseParameters, np.ndarray]] = {}
+#: Which extra columns a model keeps, by the model's structure and values
+#: (:attr:`~._torque_model.TorqueModel.structure`); the latest :data:`KEEP` models'.
+_KEPT: dict[tuple, np.ndarray] = {}
+KEEP = 256
 
 
 def kept_columns(model: Any) -> np.ndarray:
     """Indices of the extra columns of ``model`` (a :class:`~._torque_model.TorqueModel`)
     that the base regressor does not span: scaled columns at random states, ordered QR
-    (as :func:`~sedsabso_jax.base_parameters`); kept per model structure (its base,
-    recordings, transmission and terms' settings)."""
+    (as :func:`~sedsabso_jax.base_parameters`); kept per model structure and values
+    (its base, recordings, transmission and terms, every field of each)."""
     key = model.structure
     if key not in _KEPT:
-        _KEPT[key] = (model.base, _independent(model))
-    return _KEPT[key][1]
+        if len(_KEPT) >= KEEP:
+            del _KEPT[next(iter(_KEPT))]
+        _KEPT[key] = _independent(model)
+    return _KEPT[key]
 
 
 def _independent(model: Any) -> np.ndarray:

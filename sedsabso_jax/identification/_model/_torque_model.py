@@ -25,7 +25,7 @@ of a fit (:meth:`TorqueModel.reading`), the constraints of a physical body
 from __future__ import annotations
 
 import dataclasses
-import weakref
+import functools
 from collections.abc import Callable, Iterable
 from typing import Any
 
@@ -44,21 +44,22 @@ from ._term import AbstractTerm, Nonlinear, Signals
 
 #: How a model's nonlinear parameters are searched unless it says otherwise.
 DEFAULT_SEARCH = CoordinateSearch()
-#: What each model has worked out about itself (its names, columns, structure), by the
-#: model's identity while it lives: an immutable model's answers never change.
-_KNOWN: dict[int, tuple[weakref.ref, dict]] = {}
 
 
-def _known(model: object) -> dict:
-    """The answers kept for ``model`` (dropped with it)."""
-    key = id(model)
-    entry = _KNOWN.get(key)
-    if entry is None or entry[0]() is not model:
-        def forget(_: weakref.ref, k: int = key) -> None:
-            _KNOWN.pop(k, None)
-        entry = (weakref.ref(model, forget), {})
-        _KNOWN[key] = entry
-    return entry[1]
+def tree_key(tree: Any) -> tuple:
+    """A hashable key of ``tree`` (a pytree: a model, a term, a base) by its structure
+    and values: its tree structure (the classes, their static fields) and each leaf's
+    value (an array's shape, dtype and bytes). Two trees with equal keys compute the same
+    columns, whatever their ``settings()`` say."""
+    leaves, treedef = jax.tree_util.tree_flatten(tree)
+    return (treedef, tuple(_leaf_key(x) for x in leaves))
+
+
+def _leaf_key(x: Any) -> Any:
+    if isinstance(x, (np.ndarray, jax.Array)) and not isinstance(x, jax.core.Tracer):
+        a = np.asarray(x)
+        return (a.shape, a.dtype.str, a.tobytes())
+    return x
 
 
 def _matrix(transmission: object) -> object:
@@ -100,7 +101,9 @@ class TorqueModel(eqx.Module):
         if not isinstance(self.recordings, (int, np.integer)) or isinstance(
                 self.recordings, bool) or self.recordings < 1:
             raise ValueError(f"recordings must be an integer >= 1, got {self.recordings!r}")
-        if self.recordings > 1 and not any(t.name == "offset" for t in self.terms):
+        if self.recordings > 1 and (self._extra_names()
+                                    == dataclasses.replace(self, recordings=1)._extra_names()):
+            # no term has columns per recording: the model asks no term which kind it is
             raise ValueError("one torque offset per recording needs the Offset() term in the "
                              "torque model")
         if self.transmission is not None:
@@ -189,25 +192,19 @@ class TorqueModel(eqx.Module):
     def _extra_names(self) -> list[str]:
         return [name for term in self.terms for name in term.names(self)]
 
-    def _memo(self, key: str, make: Callable[[], Any]) -> Any:
-        known = _known(self)
-        if key not in known:
-            known[key] = make()
-        return known[key]
-
-    @property
+    # what a model works out about itself once (its names, columns, structure) lives on
+    # the immutable model itself (functools.cached_property), dropped with it
+    @functools.cached_property
     def structure(self) -> tuple:
-        """What sets the model's columns but the values its terms read of a fit: its base
-        (by identity), recordings, transmission and each term's kind and settings."""
-        return self._memo("structure", lambda: (
-            id(self.base), self.recordings,
-            None if self.transmission is None else self.transmission.tobytes(),
-            tuple((type(t), repr(sorted(t.settings().items()))) for t in self.terms)))
+        """What sets the model's columns: its base, terms, transmission and recordings,
+        by their tree structure and values (:func:`tree_key`; the search method sets
+        none)."""
+        return tree_key((self.base, self.terms, self.transmission, self.recordings))
 
-    @property
+    @functools.cached_property
     def _kept(self) -> np.ndarray:
         """Indices of the extra columns that the base regressor does not span."""
-        return self._memo("kept", lambda: kept_columns(self))
+        return kept_columns(self)
 
     @property
     def regrouped(self) -> tuple[str, ...]:
@@ -216,43 +213,38 @@ class TorqueModel(eqx.Module):
         kept = set(self._kept.tolist())
         return tuple(n for i, n in enumerate(names) if i not in kept)
 
-    @property
+    @functools.cached_property
     def names(self) -> tuple[str, ...]:
-        def make():
-            extra = self._extra_names()
-            return tuple(self.base.names) + tuple(extra[i] for i in self._kept)
-        return self._memo("names", make)
+        extra = self._extra_names()
+        return tuple(self.base.names) + tuple(extra[i] for i in self._kept)
 
     def _per_column(self, answer) -> np.ndarray:
         extra = [answer(term) for term in self.terms for _ in term.names(self)]
         return np.array([False] * self.base.rank + [extra[i] for i in self._kept], dtype=bool)
 
-    @property
+    @functools.cached_property
     def nonnegative(self) -> np.ndarray:
         """Per column (:attr:`names`): whether a physical value is >= 0 (the terms that
         say so; the base columns are constrained through the full parameters)."""
-        return self._memo("nonnegative", lambda: self._per_column(lambda t: t.nonnegative))
+        return self._per_column(lambda t: t.nonnegative)
 
-    @property
+    @functools.cached_property
     def bodies(self) -> np.ndarray:
         """Per column (:attr:`names`): whether it is a rigid body's inertial parameter
         (10 a body, :attr:`~._term.AbstractTerm.body`), constrained as the links are."""
-        return self._memo("bodies", lambda: self._per_column(lambda t: t.body))
+        return self._per_column(lambda t: t.body)
 
     @property
     def dim(self) -> int:
         return len(self.names)
 
-    @property
+    @functools.cached_property
     def rigid_columns(self) -> np.ndarray:
         """The base columns of the rigid body: all but each joint's viscous and Coulomb
         friction (which never regroup)."""
-        def make():
-            friction = {c for p in ("FV", "FC") for c in self.base.joint_columns(p)
-                        if c is not None}
-            return np.array([c for c in range(self.base.rank) if c not in friction],
-                            dtype=int)
-        return self._memo("rigid", make)
+        friction = {c for p in ("FV", "FC") for c in self.base.joint_columns(p)
+                    if c is not None}
+        return np.array([c for c in range(self.base.rank) if c not in friction], dtype=int)
 
     def coulomb(self, qd: Any, xp: Any = np) -> tuple[Any, bool]:
         """The model's Coulomb shape at ``qd`` (a term's, else ``sign(qd)``) and whether a
@@ -369,9 +361,9 @@ class TorqueModel(eqx.Module):
             k += m
         if k != np.shape(values)[0]:
             raise ValueError(f"expected {k} nonlinear parameters, got {np.shape(values)[0]}")
-        if isinstance(values, jax.core.Tracer):  # a trial inside a compiled search
-            return eqx.tree_at(lambda m: m.terms, self, tuple(terms))
-        return dataclasses.replace(self, terms=tuple(terms))
+        # the terms in their places (each checked itself): floats, or a compiled search's
+        # traced values alike
+        return eqx.tree_at(lambda m: m.terms, self, tuple(terms))
 
     @property
     def waiting(self) -> bool:

@@ -2,14 +2,12 @@
 model from finite differences around the best point, until the step's predicted gain is
 below the loss's rounding, so that where a search ends does not depend on its path.
 
-A grid's best point depends on which of two nearly equal trials won, and that on the
-last bits of the loss, which differ between processors (their BLAS kernels): the same
-data ended 1-5 % apart in the parameters, a few hundredths of their standard deviations,
-enough to move every printed digit of the linear values. Any path into the minimum's
-basin ends at the minimum instead: Newton's method converges there quadratically, and
-the step's predicted gain ``-g.d / 2`` falls below :data:`FTOL` of the loss within a few
-steps, where the parameters are within about ``sqrt(FTOL N)`` of their standard
-deviations of the minimum (``N`` rows).
+A grid's best point can turn on the loss's last bits, which differ between processors
+(why, and what it moved: docs/explanation/identification-defaults.md, "The same answer on
+every processor"); any path into the minimum's basin ends at the minimum instead:
+Newton's method converges there quadratically, and stops where the step's predicted gain
+``-g.d / 2`` is below :data:`FTOL` of the loss, the parameters then within about
+``sqrt(FTOL N)`` of their standard deviations of the minimum (``N`` rows).
 
 The model: the gradient by central differences, the Hessian's diagonal by second
 differences and its other entries by forward differences, all ``1 + 2k + k(k-1)/2``

@@ -26,11 +26,15 @@ class SearchProblem(Protocol):
         ...
 
 
-def _loss(u, problem):
+def fitness(u, problem: SearchProblem):
+    """The problem's loss at ``u`` as a fitness ``f(u, args)`` whose ``args`` is the
+    problem: the one wrapper every search evaluates (:func:`losses`,
+    :func:`~sedsabso_jax.minimise` with ``args=problem``: the problem's arrays are the
+    compiled run's arguments, not constants baked into it)."""
     return problem.loss(u)
 
 
-_population = eqx.filter_jit(jax.vmap(_loss, (0, None)))
+_population = eqx.filter_jit(jax.vmap(fitness, (0, None)))
 
 
 def losses(problem: SearchProblem, U: Float[np.ndarray, "p k"]) -> Float[np.ndarray, " p"]:
@@ -44,12 +48,6 @@ def on_bounds(u: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray
     the bound's in the loss's last bits only)."""
     near = 1e-9 * (upper - lower)
     return np.where(u <= lower + near, lower, np.where(u >= upper - near, upper, u))
-
-
-def fitness(u, problem):
-    """The problem's loss as a fitness ``f(u, args)`` whose ``args`` is the problem, for
-    :func:`~sedsabso_jax.minimise`."""
-    return problem.loss(u)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

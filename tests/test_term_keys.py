@@ -1,0 +1,48 @@
+"""What a model computes once is keyed by its structure and values, never by identity or
+by what a term's ``settings()`` says: a planted term whose ``settings()`` leaves out the
+field that sets its columns gets its own columns, model after model."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+
+import sedsabso_jax as sj
+from sedsabso_jax.identification import AbstractTerm, diagonal
+
+
+class Power(AbstractTerm):
+    """``FP_j qd_j |qd_j|^(power - 1)``; its ``settings()`` forget ``power`` (planted):
+    ``power = 1`` is the viscous column (the base spans it), ``power = 3`` is not."""
+
+    power: float = 1.0
+    name: ClassVar[str] = "power"
+    nonnegative: ClassVar[bool] = False
+
+    def names(self, model):
+        return tuple(f"FP{j + 1}" for j in range(model.robot.n_joints))
+
+    def columns(self, model, s):
+        xp = s.xp
+        return diagonal(s.qd * xp.abs(s.qd) ** (self.power - 1), model.robot.n_joints, xp)
+
+    def settings(self):
+        return {}
+
+
+def test_a_term_whose_settings_omit_a_field_gets_its_own_columns():
+    robot = sj.robots.rs010n()
+    n = robot.n_joints
+    linear = sj.TorqueModel.of(robot, Power(1.0))
+    assert linear.regrouped == tuple(f"FP{j + 1}" for j in range(n))  # = FV_j
+    # the same base, the same settings(), other columns
+    cubic = sj.TorqueModel.of(robot, Power(3.0), base=linear.base)
+    assert cubic.regrouped == ()  # its own columns, not the linear model's
+    assert cubic.structure != linear.structure
+    assert cubic.names[-n:] == tuple(f"FP{j + 1}" for j in range(n))
+    qd = np.random.default_rng(0).standard_normal((5, n))
+    Y = cubic.regressor(np.zeros((5, n)), qd, np.zeros((5, n)))
+    np.testing.assert_array_equal(Y[..., -n:], diagonal(qd * np.abs(qd) ** 2, n))
+    # equal values are one structure, whatever the instance
+    assert sj.TorqueModel.of(robot, Power(3.0)).structure == cubic.structure  # a new base
