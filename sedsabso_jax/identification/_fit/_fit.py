@@ -33,7 +33,7 @@ import numpy as np
 from ..._deprecation import caller_stacklevel
 from .._estimators._estimator import Estimator, EstimatorFit, FitProblem
 from .._estimators._least_squares import OLS
-from .._model._torque_model import TorqueModel
+from .._model._torque_model import TorqueModel, tree_key
 from .._search._methods import HELD
 from ._projection import Projection
 from ._samples import Samples
@@ -83,7 +83,10 @@ def search(estimator: Estimator, model: TorqueModel, samples: Samples,
     (module docstring, stage 2), and what the search did; kept on the samples for the
     next estimator with the same row weights (a validation's candidates)."""
     weights = search_weights(estimator, model, limits)
-    return samples.kept(("searched", weights.tobytes()), model,
+    # the model's structure and its search (the model's own tree also holds what it has
+    # worked out about itself, functools.cached_property: not a key)
+    return samples.kept(("searched", weights.tobytes()),
+                        (model.structure, tree_key(model.search)),
                         lambda: _searched(model, samples, weights))
 
 

@@ -148,10 +148,8 @@ class Projection(eqx.Module):
         # the validation fits unchanged on every split)
         Y0 = root.rows(model, every_column=True, cache=root.has_rows(model))
         # which columns move, and the recording's signals, once per structure of model
-        moved, recipe = root.kept(("moved", model.structure), model.base,
-                                  lambda: _moved(model, root, Y0))
-        shared = root.kept(("signals", model.structure), model.base,
-                           lambda: _signals(model, root))
+        moved, recipe = root.kept("moved", model.structure, lambda: _moved(model, root, Y0))
+        shared = root.kept("signals", model.structure, lambda: _signals(model, root))
         w = np.asarray(weights, dtype=float)
         A = Y0[..., ~moved] * (w[:, None] * mask[:, None, None])
         M = A.reshape(-1, A.shape[-1])

@@ -12,7 +12,7 @@ import numpy as np
 from ...dynamics._robot import Robot
 from .._estimators._estimator import FitProblem
 from .._estimators._normal_equations import NormalEquations
-from .._model._torque_model import TorqueModel
+from .._model._torque_model import TorqueModel, tree_key
 from ...measurements._container import Measurements
 from .._recordings import Data, is_several, recordings_of, stacked
 
@@ -44,13 +44,13 @@ class Samples:
         """The samples of ``data`` (:func:`recorded`)."""
         return recorded(robot, data)[1]
 
-    def kept(self, kind: Any, owner: Any, make) -> Any:
-        """``make()``, kept on these samples per (``kind``, ``owner``); ``owner`` is kept
-        alive with it."""
-        key = (kind, id(owner))
-        if key not in self._kept:
-            self._kept[key] = (owner, make())
-        return self._kept[key][1]
+    def kept(self, kind: Any, key: tuple, make) -> Any:
+        """``make()``, kept on these samples per (``kind``, ``key``): a model's
+        :attr:`~sedsabso_jax.TorqueModel.structure`, a base's :func:`tree_key`, a split's
+        :func:`_mask_key` (what sets the value, never an object's identity)."""
+        if (kind, key) not in self._kept:
+            self._kept[kind, key] = make()
+        return self._kept[kind, key]
 
     @property
     def root(self) -> Samples:
@@ -61,7 +61,7 @@ class Samples:
         """The base regressor's rows ``(T, n, b)`` (computed once, on the whole)."""
         if self.whole is not None:
             return self.whole.base_rows(model)[self.keep]
-        return self.kept("base", model.base, lambda: np.asarray(
+        return self.kept("base", tree_key(model.base), lambda: np.asarray(
             model.base.regressor(self.q, self.qd, self.qdd)))
 
     def _rows(self, model: TorqueModel, every_column: bool) -> np.ndarray:
@@ -77,32 +77,33 @@ class Samples:
         taken, where they were computed; on the whole, kept (``cache``)."""
         if every_column:
             if self.whole is None and cache:
-                return self.kept("every", model, lambda: self._rows(model, True))
+                return self.kept("every", model.structure, lambda: self._rows(model, True))
             return self._rows(model, True)
-        found = self.root._kept.get(("rows", id(model)))
+        found = self.root._kept.get(("rows", model.structure))
         if found is not None:
-            return found[1] if self.whole is None else found[1][self.keep]
+            return found if self.whole is None else found[self.keep]
         if self.whole is not None or not cache:
             return self._rows(model, False)
-        return self.kept("rows", model, lambda: self._rows(model, False))
+        return self.kept("rows", model.structure, lambda: self._rows(model, False))
 
     def has_rows(self, model: TorqueModel) -> bool:
         """Whether the whole's rows of ``model`` are kept."""
-        return ("rows", id(model)) in self.root._kept
+        return ("rows", model.structure) in self.root._kept
 
     def subset(self, keep: np.ndarray) -> Samples:
         """The samples ``keep`` (a mask or indices) selects: a validation's split,
-        ``compressed``; one object per ``keep`` object."""
+        ``compressed``; one object per split (kept by the samples it selects)."""
         root = self.root
-        if self.whole is None and ("subset", id(keep)) in self._kept:
-            return self._kept[("subset", id(keep))][1]
+        key = ("subset", _mask_key(keep))
+        if self.whole is None and key in self._kept:
+            return self._kept[key]
         index = np.arange(self.q.shape[0])[keep]
         whole_index = index if self.keep is None else np.asarray(self.keep)[index]
         out = Samples(self.q[keep], self.qd[keep], self.qdd[keep], self.tau[keep],
                       None if self.recording is None else self.recording[keep], True,
                       whole=root, keep=whole_index)
         if self.whole is None:
-            self._kept[("subset", id(keep))] = (keep, out)
+            self._kept[key] = out
         return out
 
     def normal_equations(self, model: TorqueModel) -> NormalEquations:
@@ -110,15 +111,15 @@ class Samples:
         most of the whole, whose rows of ``model`` the whole has, takes the whole's less
         those of the samples it leaves out."""
         whole = self.whole
-        rows = None if whole is None else whole._kept.get(("rows", id(model)))
+        rows = None if whole is None else whole._kept.get(("rows", model.structure))
         if whole is None or rows is None or self.keep is None \
                 or 2 * len(self.keep) <= whole.q.shape[0]:
-            return self.kept("normal", model, lambda: NormalEquations.of(self.rows(model),
-                                                                            self.tau))
+            return self.kept("normal", model.structure,
+                             lambda: NormalEquations.of(self.rows(model), self.tau))
         out = np.ones(whole.q.shape[0], dtype=bool)
         out[self.keep] = False
         everything = whole.normal_equations(model)
-        return everything - NormalEquations.of(rows[1][out], whole.tau[out])
+        return everything - NormalEquations.of(rows[out], whole.tau[out])
 
     def problem(self, model: TorqueModel, limits: np.ndarray | None, warn: bool = True
                 ) -> FitProblem:
@@ -126,7 +127,7 @@ class Samples:
         limits), or the rows themselves."""
         if self.compressed:
             key = None if limits is None else np.asarray(limits).tobytes()
-            found = self.kept("problems", model, dict)
+            found = self.kept("problems", model.structure, dict)
             if key not in found:
                 found[key] = self.normal_equations(model).problem(model, limits)
             return found[key]
@@ -150,3 +151,9 @@ def recorded(robot: Robot, data: Data) -> tuple[list[Measurements], Samples]:
     recordings = recordings_of(robot, data)
     q, qd, qdd, tau, index = stacked(recordings)
     return recordings, Samples(q, qd, qdd, tau, index if is_several(data) else None)
+
+
+def _mask_key(keep: np.ndarray) -> tuple:
+    """A split's key: the samples a mask or indices ``keep`` selects, by value."""
+    keep = np.asarray(keep)
+    return keep.dtype.str, keep.shape, keep.tobytes()

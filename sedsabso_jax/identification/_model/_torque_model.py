@@ -47,8 +47,9 @@ DEFAULT_SEARCH = CoordinateSearch()
 
 
 def tree_key(tree: Any) -> tuple:
-    """A hashable key of ``tree`` (a pytree: a model, a term, a base) by its structure
-    and values: its tree structure (the classes, their static fields) and each leaf's
+    """A hashable key of ``tree`` (a pytree: a term, a base, a search; for a model its
+    :attr:`~TorqueModel.structure`, since a model's own tree also carries the answers it
+    has cached) by its structure and values: its tree structure (the classes, their static fields) and each leaf's
     value (an array's shape, dtype and bytes). Two trees with equal keys compute the same
     columns, whatever their ``settings()`` say."""
     leaves, treedef = jax.tree_util.tree_flatten(tree)
