@@ -21,11 +21,12 @@ cuts them and leaves the cut ones inactive; the random draws are indexed by slot
 (:func:`~._random.uniforms`), so every way gives the same numbers up to rounding
 (``tests/test_composition.py``).
 
-A swarm is one module: a subclass with its hyperparameters as fields, :meth:`vmax`,
-:meth:`evaluations`, :meth:`propose` and :meth:`absorb`, its own state (a subclass of
-:class:`~._population.SwarmState`, made by :meth:`own_state`) where it keeps more than
-every swarm does, and ``paper()``, the paper's settings, which puts it in
-:data:`~._registry.SWARMS` by its class name.
+A swarm is one module: a subclass with its hyperparameters as fields,
+:meth:`~AbstractSwarm.vmax`, :meth:`~AbstractSwarm.evaluations`,
+:meth:`~AbstractSwarm.propose` and :meth:`~AbstractSwarm.absorb`, its own state (a
+subclass of :class:`~._population.SwarmState`, made by :meth:`~AbstractSwarm.own_state`)
+where it keeps more than every swarm does, and :meth:`~AbstractSwarm.paper`, the paper's
+settings, which puts it in :data:`~._registry.SWARMS` by its class name.
 """
 
 from __future__ import annotations
