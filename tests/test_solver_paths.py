@@ -95,7 +95,8 @@ def test_run_step_and_ask_tell_agree(solver, dtype):
         np.testing.assert_allclose(x, reference.x, rtol=rtol, atol=rtol, err_msg=way.__name__)
         assert int(solver.n_evaluations(state)) == int(reference.n_evaluations)
         assert int(solver.n_nonfinite(state)) == int(reference.n_nonfinite)
-        assert int(solver.sa_accepted(state)) == int(reference.sa_accepted)
+        result = solver.result(state, jnp.zeros(K, dtype), 3)
+        assert int(result.sa_accepted) == int(reference.sa_accepted)
     assert int(reference.n_nonfinite) > 0  # the hole was hit
 
 

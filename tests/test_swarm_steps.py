@@ -17,7 +17,8 @@ import pytest
 
 import sedsabso_jax as sj
 from sedsabso_jax.optim import BeetleStep
-from sedsabso_jax.optim._population import SwarmState, initial_state, set_active, shrink
+from sedsabso_jax.optim._population import initial_positions, set_active, shrink
+from sedsabso_jax.optim._sedsabso import SEDSABSOState
 
 D, SLOTS, M = 3, 5, 8
 TEMPERATURE = 0.5  # of the same order as the candidates' fitness differences
@@ -35,32 +36,37 @@ def problem(seed=0, upper=2.0):
     W, tau = rng.standard_normal((M, D)), rng.standard_normal(M)
     fitness = sj.L1Residual(W, tau)
     lo, hi = -np.ones(D), upper * np.ones(D)
-    s = initial_state(fitness, jnp.asarray(lo), jnp.asarray(hi), jax.random.key(seed), SLOTS,
-                      jnp.asarray(0.8 * (hi - lo)), temperature=3.0)
-    x = np.asarray(s.x).copy()
+    x, v = initial_positions(jnp.asarray(lo), jnp.asarray(hi), jax.random.key(seed), SLOTS,
+                             jnp.asarray(0.8 * (hi - lo)))
+    x = np.asarray(x).copy()
     x[0] = hi - 1e-3  # steps out of the box: clipped
-    s = _with(s, fitness, x=x, active=np.array([True, True, False, True, True]))
+    s = _with(None, fitness, x=x, v=v, active=np.array([True, True, False, True, True]))
     return fitness, W, tau, lo, hi, s
 
 
 def _with(s, fitness, antenna=A, **changes):
-    """The state with numpy replacements; fitness, antenna differences f(x + a v) -
-    f(x - a v) (a = ``antenna``), personal bests and the guide follow."""
-    x = np.asarray(changes.get("x", s.x))
-    v = np.asarray(changes.get("v", s.v))
+    """The state (``s`` with numpy replacements, or ``changes`` alone) with every swarm's
+    fields (SEDSABSO's, which hold BSO's and LDWPSO's); fitness, antenna differences
+    f(x + a v) - f(x - a v) (a = ``antenna``), personal bests and the guide follow."""
+    x = np.asarray(changes["x"] if "x" in changes else s.x)
+    v = np.asarray(changes["v"] if "v" in changes else s.v)
     value = lambda X: np.asarray(fitness.value(fitness.embed(jnp.asarray(X))))  # noqa: E731
     f = value(x)
-    active = np.asarray(changes.get("active", s.active))
+    active = np.asarray(changes["active"] if "active" in changes else s.active)
     g = int(np.argmin(np.where(active, f, np.inf)))
-    return SwarmState(
+    trials = jnp.zeros((4, x.shape[1]))  # SEDSABSO's draws and candidates, q = 4 here
+    return SEDSABSOState(
         x=jnp.asarray(x), v=jnp.asarray(v),
         antennae=jnp.asarray(value(x + antenna * v) - value(x - antenna * v)),
         antennae_bad=jnp.zeros(len(x), jnp.int32), pbest_x=jnp.asarray(x),
         pbest_f=jnp.asarray(f), active=jnp.asarray(active),
         slot_nonfinite=jnp.zeros(len(x), jnp.int32), guide_x=jnp.asarray(x[g]),
         guide_f=jnp.asarray(f[g]), best_x=jnp.asarray(x[g]), best_f=jnp.asarray(f[g]),
-        temperature=jnp.asarray(changes.get("temperature", s.temperature)),
-        sa_accepted=jnp.int32(0), n_evaluations=jnp.int32(SLOTS), n_nonfinite=jnp.int32(0))
+        temperature=jnp.asarray(changes.get("temperature", getattr(s, "temperature", 3.0)),
+                                jnp.float64),
+        sa_accepted=jnp.int32(0), n_evaluations=jnp.int32(SLOTS), n_nonfinite=jnp.int32(0),
+        key=jax.random.key(0), t=jnp.int32(0), iterations=10, round=0, asked=False,
+        trial_r=trials, trial_u=trials[:, 0], candidates=trials)
 
 
 def step(solver, fitness, s, t, lo, hi, randomness, iterations=10):
@@ -68,14 +74,13 @@ def step(solver, fitness, s, t, lo, hi, randomness, iterations=10):
     ``solver.randomness`` gives: keys, or for SEDSABSO ``(keys, r, u)``), drawn for the
     state's population: its rounds, without the slots' reordering of a phase's start."""
     draws = solver.draw(randomness, s.x.shape, s.x.dtype)
-    s = dataclasses.replace(s, t=jnp.int32(t), iterations=iterations,
-                            pending=solver.initial_pending(D, s.x.dtype))
+    s = dataclasses.replace(s, t=jnp.int32(t), iterations=iterations)
     return solver.update(fitness, s, draws, jnp.asarray(lo), jnp.asarray(hi))
 
 
 def as_numpy(s) -> dict:
-    return {k: np.asarray(getattr(s, k)) for k in SwarmState.__dataclass_fields__
-            if k not in ("pending", "key")}
+    return {f.name: np.asarray(getattr(s, f.name)) for f in dataclasses.fields(s)
+            if f.name != "key"}
 
 
 # ------------------------------------------------------------------------ references
@@ -178,8 +183,7 @@ def test_bso_moves_toward_the_better_antenna():
     to smaller |x| (to larger |x| with the authors' literal sign)."""
     fitness = sj.L1Residual(np.ones((1, 1)), np.zeros(1))
     lo, hi = jnp.full(1, -10.0), jnp.full(1, 10.0)
-    s = initial_state(fitness, lo, hi, jax.random.key(0), 1, jnp.ones(1))
-    s = _with(s, fitness, x=np.ones((1, 1)), v=np.ones((1, 1)), active=np.array([True]))
+    s = _with(None, fitness, x=np.ones((1, 1)), v=np.ones((1, 1)), active=np.array([True]))
     zeros = jnp.zeros((1, 1))
     for literal, sign in ((False, -1.0), (True, 1.0)):
         beetle = BeetleStep(w=0.0, lam=0.0, literal_sign=literal)
@@ -196,8 +200,8 @@ def test_antennae_sit_at_half_the_distance_delta_over_c():
     # the antenna step alone; V stays 1
     solver = sj.BSO(population_size=1, beetle=BeetleStep(w=1.0, lam=0.0))
     s = solver.init(fitness, lo, hi, jax.random.key(0), 10)
-    # the antennae as the solver places them (solver.antenna), at x = 0.01, V = 1
-    s = _with(s, fitness, antenna=solver.antenna, x=np.full((1, 1), 0.01), v=np.ones((1, 1)),
+    # the antennae as the solver places them (solver.beetle.antenna), at x = 0.01, V = 1
+    s = _with(s, fitness, antenna=solver.beetle.antenna, x=np.full((1, 1), 0.01), v=np.ones((1, 1)),
               active=np.array([True]))
     zeros = jnp.zeros((1, 1))
     after = solver.update(fitness, s, (zeros, zeros), lo, hi)
@@ -336,8 +340,7 @@ def test_temperature_cools_geometrically():
 def test_the_worst_personal_bests_leave_first():
     fitness, W, tau, lo, hi, s = problem(3)
     pbest_f = jnp.asarray([5.0, 1.0, 3.0, 2.0, 4.0])
-    s = SwarmState(**{**{k: getattr(s, k) for k in SwarmState.__dataclass_fields__},
-                      "pbest_f": pbest_f, "active": jnp.ones(SLOTS, bool)})
+    s = dataclasses.replace(s, pbest_f=pbest_f, active=jnp.ones(SLOTS, bool))
     kept = set_active(s, 3)
     np.testing.assert_array_equal(np.asarray(kept.active), [False, True, True, True, False])
     fewer = set_active(kept, 2)  # an inactive slot never returns

@@ -7,11 +7,11 @@ of robots (a problem is a fitness over a box). The common names (``minimise``,
 
 from __future__ import annotations
 
+import importlib as _importlib
+
 from ._bso import BeetleStep as BeetleStep
 from ._driver import CACHE_SIZE as CACHE_SIZE
 from ._driver import clear_compiled as clear_compiled
-from ._driver import time_one_of_many as time_one_of_many
-from ._external import EvosaxState as EvosaxState
 from ._external import evosax_names as evosax_names
 from ._fitness import AbstractFitness as AbstractFitness
 from ._linear import Factorization as Factorization
@@ -20,11 +20,20 @@ from ._linear import l1_solve as l1_solve
 from ._linear import l1_solve_box as l1_solve_box
 from ._population import SwarmState as SwarmState
 from ._registry import SWARMS as SWARMS
-from ._sedsabso import metropolis_accept as metropolis_accept
 from ._swarm import AbstractSwarm as AbstractSwarm
 
 __all__ = [
-    "AbstractSwarm", "SwarmState", "BeetleStep", "AbstractFitness", "EvosaxState",
-    "evosax_names", "SWARMS", "metropolis_accept", "time_one_of_many", "clear_compiled",
-    "CACHE_SIZE", "Factorization", "factorize", "l1_solve", "l1_solve_box",
+    "AbstractSwarm", "SwarmState", "BeetleStep", "AbstractFitness", "evosax_names",
+    "SWARMS", "clear_compiled", "CACHE_SIZE", "Factorization", "factorize", "l1_solve",
+    "l1_solve_box",
 ]
+
+#: Internals once in ``__all__``, still importable from here.
+_INTERNAL = {"metropolis_accept": "._sedsabso", "EvosaxState": "._external",
+             "time_one_of_many": "._driver"}
+
+
+def __getattr__(name: str) -> object:
+    if name in _INTERNAL:
+        return getattr(_importlib.import_module(_INTERNAL[name], __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -15,9 +15,7 @@ the antennae cost no product with ``W`` (``W xl = W x + d/2 W V``) and only thei
 difference is needed, so an iteration costs one product with ``W`` (new positions and
 velocities stacked) and one pass over the residuals for 3 evaluations: the antennae of
 the new positions are evaluated with them and carried to the next iteration as one
-number per beetle (:meth:`~._fitness.L1Residual.evaluate_with_antennae`). Asked for
-points (``ask``/``tell``), an iteration asks for each beetle's new position and its two
-antennae: ``3 N`` points.
+number per beetle (:meth:`~._fitness.L1Residual.evaluate_with_antennae`).
 
 :class:`BeetleStep` is this update with its hyperparameters; :class:`BSO` runs it with a
 constant population, :class:`~sedsabso_jax.SEDSABSO` adds annealing and a shrinking one.
@@ -25,7 +23,7 @@ constant population, :class:`~sedsabso_jax.SEDSABSO` adds annealing and a shrink
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar, TypeVar
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -34,9 +32,42 @@ from jaxtyping import Array, Float, Int
 
 from .. import _deprecation
 from ._checks import check_population, check_velocity_update, is_concrete
-from ._population import SwarmState, absorb_positions, replace
+from ._fitness import Fitness, antenna_difference
+from ._population import (
+    INITIAL,
+    SwarmState,
+    absorb_positions,
+    extend,
+    initial_bests,
+    replace,
+)
 from ._solver import Bounds
 from ._swarm import AbstractSwarm
+
+#: A round's evaluation of beetles: raw fitness at ``x``, ``f(x + a v) - f(x - a v)`` and
+#: how many of those two were NaN or Inf, per slot.
+Evaluation = tuple[Float[Array, " slots"], Float[Array, " slots"], Int[Array, " slots"]]
+
+
+class BeetleState(SwarmState):
+    """:class:`~._population.SwarmState` and each beetle's antennae at its position
+    (Eq. 12-13), computed with that position's fitness in the same pass and carried as
+    one number per slot: nothing of the fitness's size is carried between iterations."""
+
+    antennae: Float[Array, " slots"]  # f(x + a V) - f(x - a V) (Eq. 12)
+    antennae_bad: Int[Array, " slots"]  # how many of those two were NaN or Inf
+
+    per_slot: ClassVar[tuple[str, ...]] = (*SwarmState.per_slot, "antennae", "antennae_bad")
+
+
+B = TypeVar("B", bound=BeetleState)
+
+
+def beetle_state(state: SwarmState) -> BeetleState:
+    """``state`` with no antennae evaluated yet (zeros)."""
+    slots = state.x.shape[0]
+    return extend(BeetleState, state, antennae=jnp.zeros(slots, state.x.dtype),
+                  antennae_bad=jnp.zeros(slots, jnp.int32))
 
 
 class BeetleStep(eqx.Module):
@@ -73,7 +104,7 @@ class BeetleStep(eqx.Module):
     def vmax(self, lower: Bounds, upper: Bounds) -> Float[Array, " d"]:
         return self.vmax_fraction * (upper - lower)
 
-    def move(self, s: SwarmState, r1: Float[Array, "slots d"], r2: Float[Array, "slots d"],
+    def move(self, s: BeetleState, r1: Float[Array, "slots d"], r2: Float[Array, "slots d"],
              lower: Bounds, upper: Bounds
              ) -> tuple[Float[Array, "slots d"], Float[Array, "slots d"]]:
         """Eq. 10-13 for every slot with ``r1, r2`` the uniforms of Eq. 11: the new
@@ -89,21 +120,59 @@ class BeetleStep(eqx.Module):
         return jnp.clip(s.x + self.lam * v + (1.0 - self.lam) * xi, lower, upper), v
 
 
-def absorb_beetles(s: SwarmState, raw: Float[Array, " slots"],
-                   diff: Float[Array, " slots"] | None, diff_bad: Int[Array, " slots"] | None
-                   ) -> tuple[SwarmState, tuple[Float[Array, " d"], Float[Array, ""]]]:
-    """The moved beetles' fitness and antennae taken in: personal and best-ever updated;
-    returns the state and the swarm's global best ``(x, f)`` among the active slots (the
-    guide is the swarm's own)."""
-    s, best = absorb_positions(s, raw, 3, jnp.where(s.active, s.antennae_bad, 0))
+class AbstractBeetles(AbstractSwarm[B]):
+    """Beetles: a swarm moved by :class:`BeetleStep` whose round 0 asks for each
+    beetle's position and its two antennae, ``x``, ``x + a V``, ``x - a V`` (``3 N``
+    points), evaluated in one pass for Eq. 17
+    (:meth:`~._fitness.L1Residual.evaluate_with_antennae`). A concrete one gives
+    ``population_size``, ``beetle``, :meth:`evaluations`, :meth:`propose` and
+    :meth:`absorb` (with :func:`absorb_beetles`)."""
+
+    beetle: eqx.AbstractVar[BeetleStep]
+
+    def vmax(self, lower: Bounds, upper: Bounds) -> Float[Array, " d"]:
+        return self.beetle.vmax(lower, upper)
+
+    def points(self, k: int, s: B) -> Float[Array, "m d"]:
+        """Rounds ``-1`` and 0: the beetles and their antennae, ``3 N`` points."""
+        if k > 0:
+            return super().points(k, s)
+        a = self.beetle.antenna
+        return jnp.concatenate([s.x, s.x + a * s.v, s.x - a * s.v])
+
+    def evaluate(self, k: int, fitness: Fitness, s: B) -> Any:
+        if k > 0:
+            return super().evaluate(k, fitness, s)
+        return fitness.evaluate_with_antennae(s.x, s.v, self.beetle.antenna)
+
+    def told(self, k: int, s: B, values: Float[Array, " m"]) -> Any:
+        if k > 0:
+            return values
+        n = s.x.shape[0]
+        return (values[:n], *antenna_difference(values[n:2 * n],
+                                                values[2 * n:]))
+
+
+def absorb_beetles(k: int, s: B, evaluation: Evaluation
+                   ) -> tuple[B, tuple[Float[Array, " d"], Float[Array, ""]]]:
+    """Round ``k`` (0 or :data:`~._population.INITIAL`) of the beetles: their fitness
+    and antennae taken in, personal and best-ever updated; returns the state and the
+    swarm's global best ``(x, f)`` among the active slots."""
+    raw, diff, diff_bad = evaluation
+    if k == INITIAL:
+        s = initial_bests(s, raw)
+        best = (s.guide_x, s.guide_f)
+    else:
+        s, best = absorb_positions(s, raw, 3, jnp.where(s.active, s.antennae_bad, 0))
     return replace(s, antennae=diff, antennae_bad=diff_bad), best
 
 
-class BSO(AbstractSwarm):
+class BSO(AbstractBeetles[BeetleState]):
     """Beetle swarm with a constant population. Defaults: the paper's Sec. 5.2."""
 
     population_size: int = 50  # N: population size
     beetle: BeetleStep = BeetleStep()  # Eq. 10-13's hyperparameters
+    registry_order: ClassVar[int] = 2
 
     def __check_init__(self) -> None:
         check_population(self.population_size)
@@ -114,26 +183,23 @@ class BSO(AbstractSwarm):
         delta = 0.05, c = 2; Vmax = 0.5 (ub - lb) as in the authors' code."""
         return cls()
 
-    @property
-    def antenna(self) -> float:
-        return self.beetle.antenna
-
-    def vmax(self, lower: Bounds, upper: Bounds) -> Float[Array, " d"]:
-        return self.beetle.vmax(lower, upper)
+    def own_state(self, state: SwarmState) -> BeetleState:
+        return beetle_state(state)
 
     def evaluations(self, n_active: int | Int[np.ndarray, " t"]
                     ) -> int | Int[np.ndarray, " t"]:
         """Three per beetle: its new position and its two antennae (Eq. 12)."""
         return 3 * n_active
 
-    def move(self, s: SwarmState, draws: Any, lower: Bounds, upper: Bounds) -> SwarmState:
+    def propose(self, k: int, s: BeetleState, draws: Any, lower: Bounds, upper: Bounds
+                ) -> BeetleState:
+        """Eq. 10-13 with ``draws = (r1, r2)``."""
         x, v = self.beetle.move(s, draws[0], draws[1], lower, upper)
         return replace(s, x=x, v=v)
 
-    def absorb(self, s: SwarmState, raw: Float[Array, " slots"],
-               diff: Float[Array, " slots"] | None, diff_bad: Int[Array, " slots"] | None
-               ) -> SwarmState:
-        s, (gx, gf) = absorb_beetles(s, raw, diff, diff_bad)
+    def absorb(self, k: int, s: BeetleState, evaluation: Evaluation) -> BeetleState:
+        """The guide is the swarm's best."""
+        s, (gx, gf) = absorb_beetles(k, s, evaluation)
         return replace(s, guide_x=gx, guide_f=gf)
 
 

@@ -133,9 +133,8 @@ def _batching(batch, runs: int, run_bytes: tuple[int, int] = (0, 0), traced: boo
     transformation (``traced``) nothing is sharded. ``run_bytes``: a run's memory while
     in flight and its output (:func:`run_bytes`). Runs that do not fit (an explicit
     ``"vmap"`` or chunk, or one run alone) raise ValueError naming the limit, before
-    anything compiles. For throughput on the CPU, chunks of 5 measured best (2-core CPU,
-    SEDSABSO, 10 runs, fastest of 3: float64 5.3 s vs 6.4 s in sequence and 6.6 s all
-    vmapped; float32 2.6 / 3.5 / 3.0 s; compilation 2-4 s longer)."""
+    anything compiles. For throughput on the CPU, chunks of a few runs may beat the
+    sequence (``docs/explanation/swarms-kernels.md``)."""
     chunk = isinstance(batch, (int, np.integer)) and not isinstance(batch, bool) and batch >= 1
     if not chunk and batch not in BATCHES:
         raise ValueError(f"batch must be 'auto', 'vmap', 'shard' or an integer >= 1, got "

@@ -70,6 +70,14 @@ class AbstractFitness(eqx.Module):
         """``(f(x), f(x + a v) - f(x - a v), the antennae's non-finite count)`` per member."""
 
 
+def antenna_difference(fl: Float[Array, " k"], fr: Float[Array, " k"]
+                       ) -> tuple[Float[Array, " k"], Int[Array, " k"]]:
+    """``(f(xl) - f(xr), how many of the two were NaN or Inf)`` per member from the two
+    antennae's raw values; a NaN or Inf value counts as +Inf."""
+    bad = (~jnp.isfinite(fl)).astype(jnp.int32) + (~jnp.isfinite(fr)).astype(jnp.int32)
+    return finite_or_inf(fl) - finite_or_inf(fr), bad
+
+
 def check_arity(fn: Callable[..., Any]) -> None:
     """A fitness is called ``fn(x, args)`` (optimistix's convention): refuse one that
     cannot take two positional arguments, before anything is traced. A callable whose
@@ -129,9 +137,7 @@ class BlackBox(AbstractFitness):
                            ) -> tuple[Float[Array, "*batch"], Int[Array, "*batch"]]:
         """``(f(x + a v) - f(x - a v), non-finite count)`` per member from ``E = x``,
         ``G = v``: two evaluations; a NaN or Inf value counts as +Inf."""
-        fl, fr = self.value(E + a * G), self.value(E - a * G)
-        bad = (~jnp.isfinite(fl)).astype(jnp.int32) + (~jnp.isfinite(fr)).astype(jnp.int32)
-        return finite_or_inf(fl) - finite_or_inf(fr), bad
+        return antenna_difference(self.value(E + a * G), self.value(E - a * G))
 
     def evaluate_with_antennae(self, X: Float[Array, "k d"], V: Float[Array, "k d"],
                                a: Float[ArrayLike, ""]
@@ -142,9 +148,7 @@ class BlackBox(AbstractFitness):
         as the BBOB suite of ``sedsabso-jax compare`` does, compiles a third as much)."""
         n = X.shape[0]
         f = self.value(jnp.concatenate([X, X + a * V, X - a * V]))
-        fl, fr = f[n:2 * n], f[2 * n:]
-        bad = (~jnp.isfinite(fl)).astype(jnp.int32) + (~jnp.isfinite(fr)).astype(jnp.int32)
-        return f[:n], finite_or_inf(fl) - finite_or_inf(fr), bad
+        return (f[:n], *antenna_difference(f[n:2 * n], f[2 * n:]))
 
 
 class L1Residual(AbstractFitness):
@@ -152,16 +156,14 @@ class L1Residual(AbstractFitness):
 
     ``W`` is the stacked base regressor (Eq. 8), ``(m, d)`` with ``m = samples x joints``,
     and ``tau`` the measured torques stacked the same way. ``W`` is kept in both layouts,
-    ``(m, d)`` and transposed ``(d, m)`` (:attr:`WT`): a few rows' product reads ``W^T``
-    (SEDSABSO's 3 annealing candidates: 7.6 vs 19 us float64 from ``W``; 2-core AMD
-    EPYC, 21 x 3000, ``python -m tools.kernels``).
+    ``(m, d)`` and transposed ``(d, m)`` (:attr:`WT`): a few rows' product (SEDSABSO's
+    annealing candidates) reads ``W^T``.
 
     On the CPU a ``W`` of at most :data:`CONSTANT_BYTES` is also kept as static data
     (compared by content), which the swarms' compiled code embeds as a constant: XLA
-    then lays it out for the product once, at compilation, instead of in every product
-    (2-core AMD EPYC, quiet, same process, fastest of 7 seeds: LDWPSO 40 vs 45 ms per
-    run, BSO 84 vs 87, SEDSABSO 107 vs 113, float64). The price: a new ``W`` compiles
-    anew; the same ``W`` (and any ``tau``) reuses the compiled code.
+    then lays it out for the product once, at compilation, instead of in every product.
+    The price: a new ``W`` compiles anew; the same ``W`` (and any ``tau``) reuses the
+    compiled code. Why each layout: ``docs/explanation/swarms-kernels.md``.
     """
 
     W: Float[Array, "m d"]
@@ -228,8 +230,7 @@ class L1Residual(AbstractFitness):
     def evaluate(self, X: Float[Array, "*batch d"]) -> Float[Array, "*batch"]:
         """Eq. 17 for every member (row) of ``X``: for a population one product and one
         reduction, which XLA's CPU fuses into one kernel, so no (members x m) array is
-        written (LDWPSO, 2-core AMD EPYC, quiet, same process, fastest of 7 seeds: 45 ms
-        per run vs 58 ms with ``|r|`` summed by a product with ones, float64)."""
+        written."""
         if X.ndim > 1 and X.shape[-2] <= FEW_ROWS:
             return self.value(self.embed(X))
         return jnp.sum(jnp.abs(self.embed(X) - self.tau), -1)
@@ -257,9 +258,8 @@ class L1Residual(AbstractFitness):
         ``W x``, ``W v`` and the residuals ``r = W x - tau``: ``|r + a g| - |r - a g|``
         summed. The (members x m) arrays live only inside this call: a swarm carries
         the per-member results, not ``W x`` and ``W v``. On the CPU ``f`` is its own
-        fused product and reduction (:meth:`evaluate`) and the antennae a second pass
-        (BSO, 2-core AMD EPYC, quiet, same process, fastest of 7 seeds: 91 vs 97 ms per
-        run for ``|r|`` and the antenna terms from one pass, float64); on an accelerator
+        fused product and reduction (:meth:`evaluate`) and the antennae a second pass;
+        on an accelerator
         ``x`` and ``v`` go through one stacked product (one BLAS call) and plain
         reductions."""
         if jax.default_backend() == "cpu":
@@ -323,9 +323,8 @@ def _antenna_terms(R, G, a):
 
 
 def _row_sum(A):
-    """Sum over the last (long) axis. On the CPU as a product with ones: XLA's CPU row
-    reduction measured slower inside the swarms' loops (BSO run: about -10 % float64,
-    -15 % float32); elsewhere a plain reduction, which fuses with the ``abs`` that feeds
+    """Sum over the last (long) axis. On the CPU as a product with ones, faster there
+    inside the swarms' loops than XLA's row reduction; elsewhere a plain reduction, which fuses with the ``abs`` that feeds
     it (a product would be a separate BLAS call, and on a GPU its float32 default
     precision is TF32)."""
     if jax.default_backend() == "cpu":

@@ -9,7 +9,7 @@ optimization", CEC 1999; ``docs/explanation/paper-notes.md`` Sec. 5::
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import jax.numpy as jnp
 import numpy as np
@@ -17,12 +17,12 @@ from jaxtyping import Array, Float, Int
 
 from .. import _deprecation
 from ._checks import check_population, check_velocity_update, is_concrete
-from ._population import SwarmState, absorb_positions, replace
+from ._population import INITIAL, SwarmState, absorb_positions, initial_bests, replace
 from ._solver import Bounds
 from ._swarm import AbstractSwarm
 
 
-class LDWPSO(AbstractSwarm):
+class LDWPSO(AbstractSwarm[SwarmState]):
     """PSO with inertia falling linearly from 0.9 to 0.4. Defaults: the paper's Sec. 5.2."""
 
     population_size: int = 50  # N: population size
@@ -31,6 +31,7 @@ class LDWPSO(AbstractSwarm):
     w_start: float = 0.9  # w(0): inertia at the first iteration
     w_end: float = 0.4  # w(K - 1): inertia at the last iteration
     vmax_fraction: float = 0.5  # Vmax = vmax_fraction * (upper - lower)
+    registry_order: ClassVar[int] = 3
 
     def __check_init__(self) -> None:
         check_population(self.population_size)
@@ -50,7 +51,9 @@ class LDWPSO(AbstractSwarm):
         """One per particle."""
         return n_active
 
-    def move(self, s: SwarmState, draws: Any, lower: Bounds, upper: Bounds) -> SwarmState:
+    def propose(self, k: int, s: SwarmState, draws: Any, lower: Bounds, upper: Bounds
+                ) -> SwarmState:
+        """The velocity and position updates with ``draws = (r1, r2)``."""
         w = self.w_start - (self.w_start - self.w_end) * s.t / max(s.iterations - 1, 1)
         r1, r2 = draws
         vmax = self.vmax(lower, upper)
@@ -58,9 +61,10 @@ class LDWPSO(AbstractSwarm):
         v = jnp.clip(v, -vmax, vmax)
         return replace(s, x=jnp.clip(s.x + v, lower, upper), v=v)
 
-    def absorb(self, s: SwarmState, raw: Float[Array, " slots"],
-               diff: Float[Array, " slots"] | None = None,
-               diff_bad: Int[Array, " slots"] | None = None) -> SwarmState:
+    def absorb(self, k: int, s: SwarmState, raw: Float[Array, " slots"]) -> SwarmState:
+        """The guide is the swarm's best."""
+        if k == INITIAL:
+            return initial_bests(s, raw)
         s, (gx, gf) = absorb_positions(s, raw, 1)
         return replace(s, guide_x=gx, guide_f=gf)
 

@@ -1,12 +1,14 @@
-"""A swarm's population and the operations on it: the state of one run
-(:class:`SwarmState`), evaluation with non-finite values counted, personal, global and
-best-ever updates, and a shrinking population (SEDSABSO's Eq. 15-16) kept as a fixed
-number of slots with an active mask, reordered best first and cut at a phase's start."""
+"""What every swarm's population is: the shared state of one run (:class:`SwarmState`),
+evaluation with non-finite values counted, personal, global and best-ever updates, and a
+shrinking population (SEDSABSO's Eq. 15-16) kept as a fixed number of slots with an
+active mask, reordered best first and cut at a phase's start. A swarm's own fields live in
+its own subclass of :class:`SwarmState` (:class:`~._bso.BeetleState`,
+:class:`~._sedsabso.SEDSABSOState`)."""
 
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from typing import Any, ClassVar, TypeVar
 
 import equinox as eqx
 import jax
@@ -18,43 +20,38 @@ from ._solver import Bounds
 
 
 class SwarmState(eqx.Module):
-    """One run's population. Inactive slots still move (masking them would cost more
-    than moving them) but their personal bests are frozen and they never return: only
-    active slots' personal bests can become the best. Nothing of the fitness's size is
-    carried from one iteration to the next: a beetle's antenna difference (Eq. 12) at
-    its current position is computed with that position's fitness, in the same pass,
-    and carried as one number per slot.
+    """One run's population, what every swarm has. Inactive slots still move (masking
+    them would cost more than moving them) but their personal bests are frozen and they
+    never return: only active slots' personal bests can become the best.
 
     ``key`` is the chain the iterations draw from (iteration ``t`` uses ``split(key)[1]``
     and carries ``split(key)[0]``), ``t`` the iterations done of ``iterations``;
-    ``pending`` what a later round of the iteration needs (SEDSABSO's annealing draws and
-    candidates; its structure never changes); ``round`` and ``asked`` where a loop of
-    ``ask``/``tell`` stands (:meth:`~._swarm.AbstractSwarm.ask`): the round whose points
-    are asked next (-1: the initial population), and whether they were asked and wait
-    for ``tell``. Between iterations they are ``0, False``."""
+    ``round`` and ``asked`` where a loop of ``ask``/``tell`` stands
+    (:meth:`~._swarm.AbstractSwarm.ask`): the round whose points are asked next (-1: the
+    initial population), and whether they were asked and wait for ``tell``. Between
+    iterations they are ``0, False``. A subclass adds a swarm's own fields, and names
+    those of one value per slot in :attr:`per_slot` (reordered with the slots)."""
 
-    x: Float[Array, "slots d"]
-    v: Float[Array, "slots d"]
-    antennae: Float[Array, " slots"]  # f(x + a v) - f(x - a v) (beetles; 0 otherwise)
-    antennae_bad: Int[Array, " slots"]  # how many of those two were NaN or Inf
-    pbest_x: Float[Array, "slots d"]
+    x: Float[Array, "slots d"]  # x_i: positions
+    v: Float[Array, "slots d"]  # V_i: velocities
+    pbest_x: Float[Array, "slots d"]  # P_i: personal bests
     pbest_f: Float[Array, " slots"]
     active: Bool[Array, " slots"]
     slot_nonfinite: Int[Array, " slots"]  # non-finite evaluations of each active slot
-    guide_x: Float[Array, " d"]  # global best that steers the velocities (SA guide)
+    guide_x: Float[Array, " d"]  # g: the global best that steers the velocities
     guide_f: Float[Array, ""]
     best_x: Float[Array, " d"]  # best point ever evaluated: what is reported
     best_f: Float[Array, ""]
-    temperature: Float[Array, ""]
-    sa_accepted: Int[Array, ""]
     n_evaluations: Int[Array, ""]
     n_nonfinite: Int[Array, ""]  # non-finite evaluations not in slot_nonfinite
-    key: Any = None
-    t: Int[Array, ""] = eqx.field(default_factory=lambda: jnp.int32(0))
-    iterations: int = eqx.field(static=True, default=1)
-    pending: Any = None
-    round: int = eqx.field(static=True, default=0)
-    asked: bool = eqx.field(static=True, default=False)
+    key: PRNGKeyArray
+    t: Int[Array, ""]
+    iterations: int = eqx.field(static=True)
+    round: int = eqx.field(static=True)
+    asked: bool = eqx.field(static=True)
+
+    #: Fields of one value per slot: reordered and cut with the slots.
+    per_slot: ClassVar[tuple[str, ...]] = ("x", "v", "pbest_x", "pbest_f", "active")
 
     @property
     def nonfinite_total(self) -> Int[Array, ""]:
@@ -63,9 +60,24 @@ class SwarmState(eqx.Module):
         return self.n_nonfinite + jnp.sum(self.slot_nonfinite, dtype=jnp.int32)
 
 
-def replace(state: SwarmState, **changes: Any) -> SwarmState:
+#: A swarm's state: :class:`SwarmState` or a swarm's subclass of it.
+S = TypeVar("S", bound=SwarmState)
+T = TypeVar("T", bound=SwarmState)
+
+
+def replace(state: S, **changes: Any) -> S:
     """``state`` with fields replaced (static ones included)."""
     return dataclasses.replace(state, **changes)
+
+
+def extend(cls: type[T], state: SwarmState, **fields: Any) -> T:
+    """``state`` as a ``cls`` (a subclass of its class) with ``fields`` added."""
+    return cls(**{f.name: getattr(state, f.name) for f in dataclasses.fields(state)},
+               **fields)
+
+
+#: :attr:`SwarmState.round` of a started population: its initial positions are asked next.
+INITIAL = -1
 
 
 def evaluate(fitness: Fitness | None, X: Float[Array, "k d"],
@@ -81,14 +93,6 @@ def evaluate(fitness: Fitness | None, X: Float[Array, "k d"],
     return finite_or_inf(raw), bad.astype(jnp.int32)
 
 
-def antenna_difference(fl: Float[Array, " k"], fr: Float[Array, " k"]
-                       ) -> tuple[Float[Array, " k"], Int[Array, " k"]]:
-    """``(f(xl) - f(xr), how many of the two were NaN or Inf)`` per member from the two
-    antennae's raw values; a NaN or Inf value counts as +Inf."""
-    bad = (~jnp.isfinite(fl)).astype(jnp.int32) + (~jnp.isfinite(fr)).astype(jnp.int32)
-    return finite_or_inf(fl) - finite_or_inf(fr), bad
-
-
 def initial_positions(lower: Bounds, upper: Bounds, key: PRNGKeyArray, slots: int,
                       vmax: Float[Array, " d"]
                       ) -> tuple[Float[Array, "slots d"], Float[Array, "slots d"]]:
@@ -100,42 +104,36 @@ def initial_positions(lower: Bounds, upper: Bounds, key: PRNGKeyArray, slots: in
     return x, v
 
 
-def initial_from(x: Float[Array, "slots d"], v: Float[Array, "slots d"],
-                 raw: Float[Array, " slots"], diff: Float[Array, " slots"] | None,
-                 diff_bad: Int[Array, " slots"] | None, temperature: Float[ArrayLike, ""] = 0.0
-                 ) -> SwarmState:
-    """The state of a population at ``x`` with velocities ``v`` and raw fitness ``raw``
-    (and antenna differences, for beetles)."""
+def started(x: Float[Array, "slots d"], v: Float[Array, "slots d"], key: PRNGKeyArray,
+            iterations: int) -> SwarmState:
+    """A population at ``x`` with velocities ``v``, not evaluated (round :data:`INITIAL`;
+    its bests are placeholders until :func:`initial_bests`)."""
     slots = x.shape[0]
-    if diff is None:
-        diff, diff_bad = jnp.zeros(slots, x.dtype), jnp.zeros(slots, jnp.int32)
+    zero = jnp.zeros((), x.dtype)
+    return SwarmState(
+        x=x, v=v, pbest_x=x, pbest_f=jnp.zeros(slots, x.dtype),
+        active=jnp.ones(slots, bool), slot_nonfinite=jnp.zeros(slots, jnp.int32),
+        guide_x=x[0], guide_f=zero, best_x=x[0], best_f=zero,
+        n_evaluations=jnp.int32(slots), n_nonfinite=jnp.int32(0), key=key,
+        t=jnp.int32(0), iterations=int(iterations), round=INITIAL, asked=False)
+
+
+def initial_bests(state: S, raw: Float[Array, " slots"]) -> S:
+    """The started population with its raw fitness ``raw``: every slot active, each
+    position its personal best, the best of them the guide and the best ever; round 0."""
+    x = state.x
+    slots = x.shape[0]
     f, bad = evaluate(None, x, raw=raw)
     i = jnp.argmin(f)
-    return SwarmState(
-        x=x, v=v, antennae=diff, antennae_bad=diff_bad,  # type: ignore[arg-type]
-        pbest_x=x, pbest_f=f,
-        active=jnp.ones(slots, bool), slot_nonfinite=jnp.zeros(slots, jnp.int32),
-        guide_x=x[i], guide_f=f[i], best_x=x[i], best_f=f[i],
-        temperature=jnp.asarray(temperature, x.dtype), sa_accepted=jnp.int32(0),
-        n_evaluations=jnp.int32(slots), n_nonfinite=jnp.sum(bad, dtype=jnp.int32),
-    )
+    return replace(
+        state, pbest_x=x, pbest_f=f, active=jnp.ones(slots, bool),
+        slot_nonfinite=jnp.zeros(slots, jnp.int32), guide_x=x[i], guide_f=f[i],
+        best_x=x[i], best_f=f[i], n_evaluations=jnp.int32(slots),
+        n_nonfinite=jnp.sum(bad, dtype=jnp.int32), t=jnp.int32(0), round=0, asked=False)
 
 
-def initial_state(fitness: Fitness, lower: Bounds, upper: Bounds, key: PRNGKeyArray,
-                  slots: int, vmax: Float[Array, " d"], temperature: Float[ArrayLike, ""] = 0.0,
-                  antenna: Float[ArrayLike, ""] | None = None) -> SwarmState:
-    """Positions uniform in the box, velocities uniform in ``+-vmax``, evaluated; with
-    ``antenna`` (the beetles' ``a``), also each slot's ``f(x + a v) - f(x - a v)``."""
-    x, v = initial_positions(lower, upper, key, slots, vmax)
-    if antenna is None:
-        raw, diff, diff_bad = fitness.evaluate(x), None, None
-    else:
-        raw, diff, diff_bad = fitness.evaluate_with_antennae(x, v, antenna)
-    return initial_from(x, v, raw, diff, diff_bad, temperature)
-
-
-def update_bests(state: SwarmState, x: Float[Array, "slots d"], f: Float[Array, " slots"]
-                 ) -> tuple[SwarmState, tuple[Float[Array, " d"], Float[Array, ""]]]:
+def update_bests(state: S, x: Float[Array, "slots d"], f: Float[Array, " slots"]
+                 ) -> tuple[S, tuple[Float[Array, " d"], Float[Array, ""]]]:
     """Take the new positions; update the active slots' personal bests and the best ever.
     Returns the state and the swarm's global best ``(x, f)`` among the active slots."""
     better = state.active & (f < state.pbest_f)
@@ -153,9 +151,9 @@ def update_bests(state: SwarmState, x: Float[Array, "slots d"], f: Float[Array, 
     ), (pbest_x[i], masked[i])
 
 
-def absorb_positions(state: SwarmState, raw: Float[Array, " slots"], evaluations: int,
+def absorb_positions(state: S, raw: Float[Array, " slots"], evaluations: int,
                      extra_bad: Int[ArrayLike, " slots"] = 0
-                     ) -> tuple[SwarmState, tuple[Float[Array, " d"], Float[Array, ""]]]:
+                     ) -> tuple[S, tuple[Float[Array, " d"], Float[Array, ""]]]:
     """The moved population's raw fitness taken in (``evaluations`` per active member;
     its non-finite values, and ``extra_bad`` more, counted per slot), then
     :func:`update_bests`."""
@@ -173,17 +171,14 @@ def swarm_best(state: SwarmState) -> tuple[Float[Array, " d"], Float[Array, ""]]
     return state.pbest_x[i], masked[i]
 
 
-def set_active(state: SwarmState, n_active: Int[ArrayLike, ""]) -> SwarmState:
+def set_active(state: S, n_active: Int[ArrayLike, ""]) -> S:
     """Keep the ``n_active`` slots with the best personal bests (worst dropped first)."""
     order = jnp.argsort(jnp.where(state.active, state.pbest_f, jnp.inf))
     rank = jnp.empty_like(order).at[order].set(jnp.arange(order.shape[0]))
     return eqx.tree_at(lambda s: s.active, state, rank < n_active)
 
 
-PER_SLOT = ("x", "v", "antennae", "antennae_bad", "pbest_x", "pbest_f", "active")
-
-
-def _best_first(state: SwarmState, slots) -> tuple[Array, SwarmState]:
+def _best_first(state: S, slots) -> tuple[Array, S]:
     """The slot order best first (active before inactive; stable) and the state with the
     per-slot non-finite counts moved to the total."""
     order = jnp.argsort(jnp.where(state.active, state.pbest_f, jnp.inf))
@@ -192,19 +187,18 @@ def _best_first(state: SwarmState, slots) -> tuple[Array, SwarmState]:
     return order, state
 
 
-def _per_slot(state: SwarmState, order: Array) -> SwarmState:
-    return eqx.tree_at(lambda s: [getattr(s, k) for k in PER_SLOT], state,
-                       [getattr(state, k)[order] for k in PER_SLOT])
+def _per_slot(state: S, order: Array) -> S:
+    return replace(state, **{k: getattr(state, k)[order] for k in state.per_slot})
 
 
-def shrink(state: SwarmState, slots: int) -> SwarmState:
+def shrink(state: S, slots: int) -> S:
     """Reorder slots best first (active before inactive) and keep the first ``slots``
     (the per-slot non-finite counts move to the total first)."""
     order, state = _best_first(state, slots)
     return _per_slot(state, order[:slots])
 
 
-def reorder(state: SwarmState, slots: Int[ArrayLike, ""]) -> SwarmState:
+def reorder(state: S, slots: Int[ArrayLike, ""]) -> S:
     """:func:`shrink` without the cut: the slots reordered best first and those from
     ``slots`` on made inactive (the state keeps its shape)."""
     n = state.x.shape[0]

@@ -56,9 +56,8 @@ def fits_before_loop(solver: Drawing, randomness: Any, shape: tuple[int, ...],
                      dtype: DTypeLike, length: int) -> bool:
     """Whether a phase's population draws (``length`` iterations of ``shape``) fit in
     :data:`BEFORE_LOOP_BYTES`. Made inside the loop, XLA fuses the hash into each fusion
-    that reads a draw and computes it there again: drawn inside, a float64 run took 56 %
-    longer for LDWPSO (122 vs 79 ms), 32 % for BSO (184 vs 140 ms), 23 % for SEDSABSO
-    (213 vs 172 ms) (2-core AMD EPYC, same process, fastest of 9 seeds). The driver asks
+    that reads a draw and computes it there again (slower on the CPU,
+    ``docs/explanation/swarms-kernels.md``). The driver asks
     for draws before the loop only for a run compiled on its own on the CPU: on an
     accelerator, or inside a caller's ``jit``/``vmap`` (whose batch size is unknown
     here), recomputing them costs no memory."""
@@ -76,8 +75,7 @@ def uniforms(keys: PRNGKeyArray, shape: tuple[int, ...], dtype: DTypeLike
     For threefry keys (JAX's default, with ``jax_threefry_partitionable``, the default
     since JAX 0.5) the bits come from :func:`_threefry2x32`, the same hash written out
     round by round: XLA fuses it into one elementwise loop, where JAX's own CPU lowering
-    runs it as a 5-trip loop (an iteration's r1, r2 for 50 x 21: 3.5 vs 7.1 us on the
-    2-core AMD EPYC, ``python -m tools.kernels``). Other keys go through
+    runs it as a 5-trip loop (``docs/explanation/swarms-kernels.md``). Other keys go through
     ``jax.random.uniform``. Element ``i`` of the flattened ``shape`` depends on ``i``
     alone, so the first rows of a larger draw are a smaller draw."""
     n = math.prod(shape)

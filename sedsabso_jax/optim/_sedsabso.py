@@ -21,14 +21,14 @@ e_start) t / (K - 1))))`` with the exponents ``e_start = Inf_min``, ``e_end = In
 Eq. 16, from 67 to 37 with the paper's numbers (mean about 50); when N
 falls, the beetles with the worst personal best leave first. The iterations run in
 ``n_phases`` phases of static, shrinking slot counts, so the work follows N(t): each
-phase evaluates the largest N of its iterations, so 4 phases waste about 7 % of the ideal
-work and 8 about 4 %, while each phase adds one compiled loop body (about 5 s of
-compilation each on the 2-core CPU).
+phase evaluates the largest N of its iterations, and each phase adds one compiled loop
+body (the trade, measured: ``docs/explanation/swarms-kernels.md``).
 """
 
 from __future__ import annotations
 
-from typing import Any
+import dataclasses
+from typing import Any, ClassVar
 
 import jax
 import jax.numpy as jnp
@@ -37,12 +37,12 @@ from jax.typing import DTypeLike
 from jaxtyping import Array, Bool, Float, Int, PRNGKeyArray
 
 from .. import _deprecation
-from ._bso import BeetleStep, absorb_beetles
+from ._bso import AbstractBeetles, BeetleState, BeetleStep, absorb_beetles, beetle_state
 from ._checks import check_integer, check_population, is_concrete
-from ._population import SwarmState, evaluate, replace, swarm_best
+from ._population import INITIAL, SwarmState, evaluate, extend, replace, swarm_best
 from ._random import uniforms
+from ._result import Result
 from ._solver import Bounds
-from ._swarm import AbstractSwarm
 
 
 def metropolis_accept(u: Float[Array, "*shape"] | float, f_new: Float[Array, "*shape"] | float,
@@ -57,7 +57,18 @@ def metropolis_accept(u: Float[Array, "*shape"] | float, f_new: Float[Array, "*s
     return jnp.exp(-(f_new - f_old) / temperature) > u
 
 
-class SEDSABSO(AbstractSwarm):
+class SEDSABSOState(BeetleState):
+    """:class:`~._bso.BeetleState` and the annealing's: the temperature, the moves
+    accepted, and the iteration's draws and candidates for its annealing round."""
+
+    temperature: Float[Array, ""]  # T
+    sa_accepted: Int[Array, ""]  # Metropolis moves accepted so far
+    trial_r: Float[Array, "q d"]  # r_k of Eq. 14, drawn with the iteration
+    trial_u: Float[Array, " q"]  # the Metropolis uniforms, drawn with the iteration
+    candidates: Float[Array, "q d"]  # cand_k of Eq. 14, once proposed
+
+
+class SEDSABSO(AbstractBeetles[SEDSABSOState]):
     """BSO + simulated annealing on the guide + shrinking population. Defaults: Sec. 5.2."""
 
     population_size: int = 90  # N_start: the initial population (Eq. 15)
@@ -69,6 +80,7 @@ class SEDSABSO(AbstractSwarm):
     perturbation_scale: float = 1.0  # s in cand = g (1 + s r); 1.0 is Eq. 14 as printed
     n_phases: int = 4  # compiled phases of static population size (see module doc)
     beetle: BeetleStep = BeetleStep()  # Eq. 10-13's hyperparameters
+    registry_order: ClassVar[int] = 1
 
     def __check_init__(self) -> None:
         check_population(self.population_size)
@@ -92,19 +104,8 @@ class SEDSABSO(AbstractSwarm):
         return cls()
 
     @property
-    def antenna(self) -> float:
-        return self.beetle.antenna
-
-    @property
-    def initial_temperature(self) -> float:
-        return self.temperature
-
-    @property
     def asks_per_iteration(self) -> int:
         return 2 if self.n_trials else 1
-
-    def vmax(self, lower: Bounds, upper: Bounds) -> Float[Array, " d"]:
-        return self.beetle.vmax(lower, upper)
 
     def schedule(self, iterations: int) -> np.ndarray:
         """Eq. 15-16, decreasing: ``round(N_start exp(-e(t)))``, ``e`` linear from
@@ -118,11 +119,20 @@ class SEDSABSO(AbstractSwarm):
         """BSO's three per beetle and the ``q`` annealing candidates (Eq. 14)."""
         return 3 * n_active + self.n_trials
 
-    def initial_pending(self, dim: int, dtype: DTypeLike) -> Any:
-        """Eq. 14's ``r`` (q x dim), the q Metropolis uniforms and the candidates: drawn
-        with the iteration, used by its annealing round."""
-        return (jnp.zeros((self.n_trials, dim), dtype), jnp.zeros(self.n_trials, dtype),
-                jnp.zeros((self.n_trials, dim), dtype))
+    def own_state(self, state: SwarmState) -> SEDSABSOState:
+        """The beetles' state, the temperature at ``T_0``, and zeros for the annealing
+        round's draws and candidates (q x dim)."""
+        dim, dtype = state.x.shape[1], state.x.dtype
+        trials = jnp.zeros((self.n_trials, dim), dtype)
+        return extend(SEDSABSOState, beetle_state(state),
+                      temperature=jnp.asarray(self.temperature, dtype),
+                      sa_accepted=jnp.int32(0), trial_r=trials,
+                      trial_u=jnp.zeros(self.n_trials, dtype), candidates=trials)
+
+    def result(self, state: SEDSABSOState, history_f: Float[Array, " iterations"], dim: int
+               ) -> Result:
+        return dataclasses.replace(super().result(state, history_f, dim),
+                                   sa_accepted=state.sa_accepted)
 
     def randomness(self, key: PRNGKeyArray, dim: int, dtype: DTypeLike
                    ) -> tuple[PRNGKeyArray, Float[Array, "q d"], Float[Array, " q"]]:
@@ -141,19 +151,30 @@ class SEDSABSO(AbstractSwarm):
         k12, r, u = randomness
         return uniforms(k12, shape, dtype), r, u
 
-    # ---------------------------------------------------- round 0: the beetles
-    def move(self, s: SwarmState, draws: Any, lower: Bounds, upper: Bounds) -> SwarmState:
-        """Eq. 10-13; the annealing round's draws kept for it."""
-        r12, r, u = draws
-        x, v = self.beetle.move(s, r12[0], r12[1], lower, upper)
-        return replace(s, x=x, v=v, pending=(r, u, jnp.zeros_like(r)))
+    # ------------------------------------------------------- round 0: the beetles
+    def propose(self, k: int, s: SEDSABSOState, draws: Any, lower: Bounds, upper: Bounds
+                ) -> SEDSABSOState:
+        """Round 0: Eq. 10-13, the annealing round's draws kept for it. Round 1: Eq. 14's
+        candidates around the swarm's best ``P_g`` after the beetles moved."""
+        if k == 0:
+            r12, r, u = draws
+            x, v = self.beetle.move(s, r12[0], r12[1], lower, upper)
+            return replace(s, x=x, v=v, trial_r=r, trial_u=u, candidates=jnp.zeros_like(r))
+        return replace(s, candidates=self.candidates(swarm_best(s)[0], s.trial_r, lower,
+                                                     upper))
 
-    def absorb(self, s: SwarmState, raw: Float[Array, " slots"],
-               diff: Float[Array, " slots"] | None, diff_bad: Int[Array, " slots"] | None
-               ) -> SwarmState:
-        """The beetles' update; the guide becomes the swarm's best ``P_g`` if that is
-        better (without annealing trials, the temperature then cools)."""
-        s, (gx, gf) = absorb_beetles(s, raw, diff, diff_bad)
+    def points(self, k: int, s: SEDSABSOState) -> Float[Array, "m d"]:
+        return s.candidates if k > 0 else super().points(k, s)
+
+    def absorb(self, k: int, s: SEDSABSOState, evaluation: Any) -> SEDSABSOState:
+        """Round 0: the beetles' update; the guide becomes the swarm's best ``P_g`` if
+        that is better (without annealing trials, the temperature then cools). Round 1:
+        :meth:`anneal`."""
+        if k > 0:
+            return self.anneal(s, evaluation)
+        s, (gx, gf) = absorb_beetles(k, s, evaluation)
+        if k == INITIAL:
+            return s
         swarm_better = gf < s.guide_f
         s = replace(s, guide_x=jnp.where(swarm_better, gx, s.guide_x),
                     guide_f=jnp.where(swarm_better, gf, s.guide_f))
@@ -167,19 +188,10 @@ class SEDSABSO(AbstractSwarm):
         """Eq. 14: ``clip(P_g (1 + s r_k), lower, upper)`` for the q rows of ``r``."""
         return jnp.clip(gx * (1.0 + self.perturbation_scale * r), lower, upper)
 
-    def propose_later(self, k: int, s: SwarmState, lower: Bounds, upper: Bounds
-                      ) -> SwarmState:
-        """Eq. 14's candidates around the swarm's best ``P_g`` after the beetles moved."""
-        r, u, _ = s.pending
-        return replace(s, pending=(r, u, self.candidates(swarm_best(s)[0], r, lower, upper)))
-
-    def later_points(self, k: int, s: SwarmState) -> Float[Array, "q d"]:
-        return s.pending[2]
-
-    def absorb_later(self, k: int, s: SwarmState, raw: Float[Array, " q"]) -> SwarmState:
+    def anneal(self, s: SEDSABSOState, raw: Float[Array, " q"]) -> SEDSABSOState:
         """The q candidates' Metropolis trials against the current guide, in turn (q is
         small: unrolled); the best ever kept apart; counts; the temperature cools."""
-        _, u, cand = s.pending
+        u, cand = s.trial_u, s.candidates
         fc, bad = evaluate(None, cand, raw=raw)
         guide_f, chosen, accepted = s.guide_f, jnp.int32(-1), s.sa_accepted
         for j in range(self.n_trials):

@@ -107,10 +107,6 @@ class AbstractSolver(eqx.Module):
         """Evaluations so far that returned NaN or Inf."""
         return state.n_nonfinite
 
-    def sa_accepted(self, state: State) -> Int[Array, ""]:
-        """Simulated-annealing moves accepted so far (SEDSABSO); 0 for the others."""
-        return jnp.int32(0)
-
     @property
     def asks_per_iteration(self) -> int:
         """Ask/tell rounds per iteration (the first ask after :meth:`start` asks for the
@@ -170,7 +166,7 @@ class AbstractSolver(eqx.Module):
         return Result(method=self.label, x=x, f=f, history_f=history_f,
                       history_n=jnp.asarray(self.population_schedule(iterations, dim),
                                             jnp.int32),
-                      sa_accepted=self.sa_accepted(state),
+                      sa_accepted=jnp.int32(0),
                       n_evaluations=self.n_evaluations(state),
                       n_nonfinite=self.n_nonfinite(state))
 
