@@ -182,8 +182,8 @@ BUGS = [
      "floor[j] = 0.0", "normal equations forget the residual the rows leave out (Gautier's "
      "weights)", VALIDATIONS, None),
     ("identification/_fit/_samples.py",
-     "everything - NormalEquations.of(rows[1][out], whole.tau[out])",
-     "everything - NormalEquations.of(rows[1][~out], whole.tau[~out])",
+     "everything - NormalEquations.of(rows[out], whole.tau[out])",
+     "everything - NormalEquations.of(rows[~out], whole.tau[~out])",
      "a subset's normal equations subtract the wrong rows", VALIDATIONS, None),
     ("identification/_estimators/_normal_equations.py", "            rows[:, norms == 0] = 0.0",
      "            pass", "rounding left in the columns a joint does not see (Gautier's "
@@ -311,8 +311,8 @@ BUGS = [
      "            centre, half = u, half * 1 / (G - 1)",
      "the coordinate search's grid narrows past the minimum", SEARCH, None),
     ("identification/_fit/_fit.py",
-     '    return samples.kept(("searched", weights.tobytes()), model,',
-     '    return samples.kept(("searched",), model,',
+     '    return samples.kept(("searched", weights.tobytes()),',
+     '    return samples.kept(("searched",),',
      "a search kept for estimators that weigh the rows otherwise", STATE, None),
     ("identification/_fit/_fit.py", "    if model.waiting:\n",
      "    if False:\n", "load friction's first stage skipped (the prior's load kept)",

@@ -33,6 +33,7 @@ from .._metrics import (
     metrics_table,
     validation_metrics,
 )
+from .._model._torque_model import TorqueModel
 from .._recordings import joined, stacked
 from .._validation._extrapolation import Extrapolation
 from .._validation._rests import Rests
@@ -79,22 +80,13 @@ PARAMETER_UNITS = ("in SI units by name (kg m^2 for inertia XX..ZZ, kg m for fir
                    "MX..MZ, kg for M, N m for Coulomb friction FC, N m s/rad for viscous "
                    "friction FV, N and N s/m on a prismatic joint, a regrouped `...R` "
                    "parameter in its first term's unit)")
-#: The unit of a friction model's extra term (:mod:`._model`), by the letters of its name.
-MODEL_UNITS = ("extra terms in N m for a torque offset OFF, N m s^2/rad^2 for velocity-squared "
-               "friction FQ, kg m^2 for a rotor inertia IA, N m s/rad and N m for a coupled "
-               "motor's viscous and Coulomb friction FVM, FCM (IA, FVM, FCM motor-side)")
-#: The units of the terms beyond :data:`MODEL_UNITS`, written where the model has them.
-MORE_UNITS = {"FS": "N m for Stribeck's excess friction FS",
-              "FL": "N m per N m transmitted for friction growing with the load FL",
-              "FLV": "s/rad for viscous friction growing with the load FLV",
-              "FP": "N m for friction at rest FP (the torque it saturates at)"}
 
 
-def model_units(names: Sequence[str]) -> str:
-    """:data:`MODEL_UNITS`, and the units of :data:`MORE_UNITS` that ``names`` use."""
-    prefixes = {n.rstrip("0123456789") for n in names}
-    more = [unit for prefix, unit in MORE_UNITS.items() if prefix in prefixes]
-    return MODEL_UNITS + "".join(f"; {unit}" for unit in more)
+def model_units(model: TorqueModel) -> str:
+    """The units of ``model``'s extra terms, each term's own
+    (:attr:`~.._model._term.AbstractTerm.unit`), in the model's order."""
+    units = [t.unit for t in model.terms if t.unit]
+    return ", extra terms in " + "; ".join(units) if units else ""
 
 
 def _cv_error(cv: CrossValidation) -> str:
@@ -211,8 +203,8 @@ class IdentificationReport:
                      ("#", "row number"),
                      ("parameter", "a base parameter (Eq. 3-4, `R` where others are "
                       "regrouped onto it) or an extra term of the friction model"),
-                     ("value", f"the identified value {PARAMETER_UNITS}, "
-                      f"{model_units(ident.names)}"),
+                     ("value", f"the identified value {PARAMETER_UNITS}"
+                      f"{model_units(ident.model)}"),
                      ("std", "its standard deviation in the value's unit, from the residual "
                       "covariance s^2 (W^T W)^-1 of the weighted rows W (exact for OLS and WLS "
                       "with independent errors and the model right; a linearisation that "

@@ -17,6 +17,7 @@ class Armature(AbstractTerm):
     ``qdd_j``; with a diagonal ``K`` its effect at the joint is ``N_j^2 IA_j``."""
 
     name: ClassVar[str] = "armature"
+    unit: ClassVar[str] = "kg m^2 for a rotor inertia IA (motor-side)"
     nonnegative: ClassVar[bool] = True
 
     def names(self, model: ModelView) -> tuple[str, ...]:
@@ -35,6 +36,8 @@ class CoupledMotorFriction(AbstractTerm):
     couple a motor."""
 
     name: ClassVar[str] = "coupling"
+    unit: ClassVar[str] = ("N m s/rad and N m for a coupled motor's viscous and Coulomb "
+                           "friction FVM, FCM (motor-side)")
     nonnegative: ClassVar[bool] = True
 
     def names(self, model: ModelView) -> tuple[str, ...]:

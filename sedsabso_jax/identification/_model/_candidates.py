@@ -5,12 +5,13 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+import numpy as np
+
 from ...dynamics._base_parameters import BaseParameters, base_parameters
 from ...dynamics._robot import Robot
 from ...measurements._transmission import TransmissionLike, coupled_motors
 from .._default._policy import DEFAULT
 from ._actuators import CoupledMotorFriction
-from ._friction import SmoothCoulomb
 from ._offset import Offset
 from ._term import AbstractTerm
 from ._torque_model import TorqueModel
@@ -29,9 +30,10 @@ def candidate_models(robot: Robot,
     :class:`~._actuators.CoupledMotorFriction` where ``transmission`` couples a motor,
     with one :class:`~._offset.Offset` per recording for ``recordings > 1``, the base
     parameters computed once (``base``: given), and each model once (``()`` and
-    ``(Offset(),)`` are one model with offsets per recording). Where the smooth Coulomb
-    term does not apply (a joint's Coulomb column regroups with other base columns),
-    the default candidates keep the jump."""
+    ``(Offset(),)`` are one model with offsets per recording). Where a joint's Coulomb
+    column regroups with other base columns, the default candidates keep the jump: a
+    term that shapes the Coulomb columns (:meth:`~._term.AbstractTerm.coulomb`, the
+    smooth Coulomb) is left out."""
     if base is None:
         base = base_parameters(robot)
     model = TorqueModel.of(robot, transmission=transmission, base=base)
@@ -43,7 +45,8 @@ def candidate_models(robot: Robot,
             (Offset(),) if recordings > 1 else ())
         terms += tuple(t for t in added if t not in terms)
         if frictions is FRICTION_CANDIDATES and None in base.joint_columns("FC"):
-            terms = tuple(t for t in terms if not isinstance(t, SmoothCoulomb))
+            still = np.zeros((1, robot.n_joints))
+            terms = tuple(t for t in terms if t.coulomb(still) is None)
         model = TorqueModel.of(robot, terms, transmission=transmission, base=base,
                                recordings=recordings)
         if all(m.friction != model.friction for m in models):

@@ -40,6 +40,7 @@ class Quadratic(AbstractJointFriction):
     drag at speed), ``>= 0`` for a physical body."""
 
     name: ClassVar[str] = "quadratic"
+    unit: ClassVar[str] = "N m s^2/rad^2 for velocity-squared friction FQ"
     prefix: ClassVar[str] = "FQ"
     nonnegative: ClassVar[bool] = True
 
@@ -86,6 +87,7 @@ class Stribeck(AbstractVelocityScale):
                                                     converter=as_scale)
     fitted: bool = False
     name: ClassVar[str] = "stribeck"
+    unit: ClassVar[str] = "N m for Stribeck's excess friction FS"
     nonnegative: ClassVar[bool] = True
     symbol: ClassVar[str] = "v_stribeck"
     default_scale: ClassVar[float] = STRIBECK_VELOCITY

@@ -47,6 +47,11 @@ class LoadFriction(AbstractTerm):
                              f"model's rigid-body columns, got {self.load_point!r}")
 
     @property
+    def unit(self) -> str:
+        return ("N m per N m transmitted for friction growing with the load FL"
+                + ", s/rad for viscous friction growing with the load FLV" * self.viscous)
+
+    @property
     def waiting(self) -> bool:
         return self.load_point is None
 

@@ -16,6 +16,7 @@ class Offset(AbstractTerm):
     the offsets' mean."""
 
     name: ClassVar[str] = "offset"
+    unit: ClassVar[str] = "N m for a torque offset OFF"
     nonnegative: ClassVar[bool] = False
 
     def names(self, model: ModelView) -> tuple[str, ...]:

@@ -44,6 +44,7 @@ class Presliding(AbstractScale):
     scan: str = "auto"
     largest: float | None = None
     name: ClassVar[str] = "presliding"
+    unit: ClassVar[str] = "N m for friction at rest FP (the torque it saturates at)"
     nonnegative: ClassVar[bool] = True
     #: The displacements' search box (rad or m).
     bounds: ClassVar[tuple[float, float]] = (1e-5, 0.5)

@@ -160,6 +160,12 @@ class AbstractTerm(eqx.Module):
         return None
 
     @property
+    def unit(self) -> str:
+        """The unit of the term's coefficients in reports, with their names (``"N m for a
+        torque offset OFF"``); empty where the term has no columns of its own."""
+        return ""
+
+    @property
     def body(self) -> bool:
         """Whether the columns are rigid bodies' inertial parameters, 10 a body in the
         robot's order (``XX YY ZZ XY XZ YZ M MX MY MZ``): a physical body has a positive

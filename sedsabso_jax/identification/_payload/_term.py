@@ -63,6 +63,7 @@ class PayloadInertia(AbstractTerm):
     frame: tuple[float, ...] = eqx.field(converter=_as_frame)
     carried: tuple[int, ...] = eqx.field(converter=tuple)
     name: ClassVar[str] = "payload"
+    unit: ClassVar[str] = "the payload's inertial parameters payload_* as a body's"
     nonnegative: ClassVar[bool] = False
 
     def __check_init__(self):
