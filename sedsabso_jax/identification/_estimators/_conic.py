@@ -9,6 +9,8 @@ import time
 import warnings
 from typing import Any
 
+from ..._deprecation import caller_stacklevel
+
 #: The report of a fit whose least-squares solution already meets the constraints.
 NOT_SOLVED = "none (the least-squares solution is consistent)"
 
@@ -38,7 +40,7 @@ def solve(problem: Any, what: str, none_found: str, *, started: float | None = N
     if problem.status == cp.OPTIMAL_INACCURATE:
         warnings.warn(f"{what}: Clarabel reached its iteration limit or stalled (status "
                       f"'optimal_inaccurate'); the parameters are feasible but may be off "
-                      f"the optimum", stacklevel=4)
+                      f"the optimum", stacklevel=caller_stacklevel())
     return {"solver": "Clarabel (cvxpy)", "status": str(problem.status),
             "iterations": int(problem.solver_stats.num_iters or 0),
             "seconds": time.perf_counter() - t0}
