@@ -239,3 +239,67 @@ def small_campaign(tmp_path_factory):
     docs = [json.loads(p.read_text()) for p in sorted((out / "tasks").rglob("*.json"))]
     return out, docs, json.loads((out / "summary.json").read_text())
 
+
+
+def _quat(R) -> np.ndarray:
+    """MuJoCo's (w, x, y, z) quaternion of a rotation matrix."""
+    from scipy.spatial.transform import Rotation
+
+    x, y, z, w = Rotation.from_matrix(R).as_quat()
+    return np.array([w, x, y, z])
+
+
+def random_mjcf(rng, n_movable: int, *, prismatic_prob=0.2, fixed_prob=0.3,
+                armature=False, damping=False, frictionloss=False, gravity=None,
+                timestep=0.002, integrator="RK4") -> str:
+    """A serial MJCF (written here, never by the package) with ``n_movable`` hinge/slide
+    joints at random axes and anchors in bodies at random poses, random fixed bodies in
+    between (welded: their inertia belongs to the link above), random inertials given
+    either as ``quat`` + ``diaginertia`` or as ``fullinertia``; with ``armature``,
+    ``damping`` or ``frictionloss`` each joint gets a random one, and each joint has a
+    ``motor`` actuator (gear 1, no control range)."""
+    g = rng.standard_normal(3) if gravity is None else np.asarray(gravity, float)
+    g = 9.81 * g / np.linalg.norm(g) if gravity is None else g
+    parts = ['<mujoco model="random">', '<compiler angle="radian" autolimits="true"/>',
+             f'<option gravity="{_fmt(g)}" timestep="{timestep!r}" integrator="{integrator}"/>',
+             "<worldbody>"]
+    closing, joints = [], []
+
+    def inertial(k):
+        m, com, I = random_inertial(rng)
+        if k % 2:
+            full = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]
+            return (f'<inertial pos="{_fmt(com)}" mass="{float(m)!r}" '
+                    f'fullinertia="{_fmt(full)}"/>')
+        w, V = np.linalg.eigh(I)
+        V = V * np.sign(np.linalg.det(V))
+        return (f'<inertial pos="{_fmt(com)}" quat="{_fmt(_quat(V))}" mass="{float(m)!r}" '
+                f'diaginertia="{_fmt(w)}"/>')
+
+    def body(name, k):
+        pos = rng.uniform(-0.4, 0.4, 3)
+        parts.append(f'<body name="{name}" pos="{_fmt(pos)}" '
+                     f'quat="{_fmt(_quat(random_rotation(rng)))}">')
+        parts.append(inertial(k))
+        closing.append("</body>")
+
+    k = 0
+    for i in range(n_movable):
+        if rng.uniform() < fixed_prob:
+            body(f"fixed_{k}", k)
+            k += 1
+        body(f"link{i + 1}", k)
+        k += 1
+        axis = rng.standard_normal(3)
+        axis /= np.linalg.norm(axis)
+        kind = "slide" if rng.uniform() < prismatic_prob else "hinge"
+        extra = "".join(f' {key}="{float(rng.uniform(0.01, 0.5))!r}"'
+                        for key, on in (("armature", armature), ("damping", damping),
+                                        ("frictionloss", frictionloss)) if on)
+        parts.append(f'<joint name="j{i + 1}" type="{kind}" axis="{_fmt(axis)}" '
+                     f'pos="{_fmt(rng.uniform(-0.2, 0.2, 3))}"{extra}/>')
+        joints.append(f"j{i + 1}")
+    parts += closing[::-1] + ["</worldbody>", "<actuator>"]
+    parts += [f'<motor name="m{j}" joint="{j}" gear="1"/>' for j in joints]
+    parts += ["</actuator>", "</mujoco>"]
+    return "\n".join(parts)
