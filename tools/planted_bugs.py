@@ -546,6 +546,16 @@ BUGS = [
      "    return (treedef, ())", "a model's structure by its tree alone, not its values: a "
      "term's field that settings() omit reuses another model's columns",
      ["tests/test_term_keys.py"], None),
+    # issue 44: the identified model written for MuJoCo
+    ("dynamics/_mjcf_writer.py", "(w, np.cross(w, v)) if revolute",
+     "(w, np.zeros(3)) if revolute", "an MJCF joint turns about the link origin, not its "
+     "axis (standard DH)", ["tests/test_mjcf_writer.py"], None),
+    ("dynamics/_mjcf_writer.py", "FRICTION_SOLIMP = (0.999, 0.999, 0.001)",
+     "FRICTION_SOLIMP = (0.9, 0.95, 0.001)", "MuJoCo's default impedance for the dry "
+     "friction: much of the Coulomb friction lost", ["tests/test_mjcf_writer.py"], None),
+    ("identification/_model/_offset.py", "Held(offset=np.asarray(values, float)",
+     "Held(offset=-np.asarray(values, float)", "the torque offset's sign in the "
+     "actuators' bias", ["tests/test_mjcf_writer.py"], None),
 ]
 
 

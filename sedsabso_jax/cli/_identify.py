@@ -70,7 +70,8 @@ def _choice(args: argparse.Namespace, physical: bool | None, candidates: int) ->
     validation: Any = None  # --folds 0: none
     if args.folds != 0 and args.validation == "pooled":
         validation = DefaultValidation(args.folds, None if args.friction != AUTO
-                                       or not args.friction_at_rest else KEPT_TERMS)
+                                       or not args.friction_at_rest or args.mujoco_terms
+                                       else KEPT_TERMS)
     elif args.folds != 0 and args.validation == "phase":
         validation = PhaseFolds(args.folds)
     elif args.folds != 0:
@@ -95,20 +96,28 @@ def run(args: argparse.Namespace) -> None:
     from ..identification._default._held_out import named_recordings
     from ..identification._default._policy import DEFAULT
     from ..identification._default._select_and_identify import chosen_and_identified
+    from ..identification._fit._simulator import held_frictions, import_mujoco
     from ..identification._model._candidates import candidate_models
     from ..identification._model._order import parse_friction
     from ..identification._recordings import recordings_of
 
     refuse_contradictions(args)
-    refuse_overwriting({"--json": args.json, "--urdf-out": args.urdf_out},
+    refuse_overwriting({"--json": args.json, "--urdf-out": args.urdf_out,
+                        "--mjcf-out": args.mjcf_out},
                        inputs_of(args, "--data", "--validate"))
-    if args.urdf_out is not None and args.physical is False:
-        raise ValueError("--urdf-out needs physically consistent link parameters, which "
-                         "--no-physical rules out")
-    # --urdf-out: a simulator's URDF needs physically consistent link parameters
-    physical = True if args.urdf_out is not None else args.physical
+    simulator = args.urdf_out is not None or args.mjcf_out is not None
+    for flag, value in (("--urdf-out", args.urdf_out), ("--mjcf-out", args.mjcf_out)):
+        if value is not None and args.physical is False:
+            raise ValueError(f"{flag} needs physically consistent link parameters, which "
+                             f"--no-physical rules out")
+    if args.mjcf_out is not None or args.mujoco_terms:
+        import_mujoco()  # before the long run: the written model is checked in MuJoCo
+    # a simulator's model needs physically consistent link parameters
+    physical = True if simulator else args.physical
     frictions = DEFAULT.frictions if args.friction == AUTO else (
         parse_friction(args.friction),)
+    if args.mujoco_terms:
+        frictions = held_frictions(frictions)
     estimators = DEFAULT.estimator_candidates(None if args.method == AUTO else args.method,
                                               args.weights, runs=args.runs,
                                               iterations=args.iterations, seed=args.seed)
@@ -141,6 +150,9 @@ def run(args: argparse.Namespace) -> None:
         report = chosen_and_identified(robot, data, choice, models, estimators,
                                        held=dict(named_recordings(robot, held_out)),
                                        limits=limits, progress=progress)
+        if args.mjcf_out is not None:
+            report = report.with_mjcf(limits=joint_limits(args.robot, robot),
+                                      timestep=1.0 / report.data.rate)
     paths = [os.path.abspath(p) for p in args.data]
     settings = {"robot": args.robot, "data": paths[0] if len(paths) == 1 else paths,
                 "validate": (None if not validate else os.path.abspath(validate[0])
@@ -149,7 +161,7 @@ def run(args: argparse.Namespace) -> None:
                 "motor_side": bool(args.motor_side)}
     with urdf_source(args.robot) as source:
         written = report.write(settings, args.out, args.json, args.urdf_out,
-                               urdf_source=source)
+                               urdf_source=source, mjcf_path=args.mjcf_out)
     text = report.text()
     progress.finish("written" if written else "done")
     print(text)
@@ -241,5 +253,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      help="write the input URDF with the identified inertials and joint "
                      "friction, all else kept (a new URDF for a DH robot); only physically "
                      "consistent candidates are tried")
+    out.add_argument("--mjcf-out", metavar="PATH", default=None,
+                     help="write the identified robot as a MuJoCo model (MJCF: inertials, "
+                     "joint damping, frictionloss and armature, a torque actuator per joint "
+                     "whose bias is the torque offset) and report its error in MuJoCo; "
+                     "only physically consistent candidates are tried (the mujoco extra)")
+    out.add_argument("--mujoco-terms", action="store_true",
+                     help="try only the friction models MuJoCo holds in full (no smooth "
+                     "Coulomb, load or presliding friction): the model made for --mjcf-out")
     add_run_options(ip, config="prior_strength = 1e-3")
     ip.set_defaults(func=run)

@@ -53,7 +53,7 @@ def to_urdf(robot: Robot, params: Float[ArrayLike, " p"] | None = None, *,
     """URDF text of ``robot`` with ``params`` (12 per link, default ``robot.params``),
     which must be physically consistent (every link a real body: positive mass, inertia
     satisfying the triangle inequalities); ``comment`` goes into an XML comment."""
-    p = _checked(robot, params)
+    p = checked_params(robot, params, "a URDF")
     lines = ['<?xml version="1.0"?>', f"<robot name={quoteattr(robot.name)}>"]
     if comment:
         lines.append("  <!-- " + comment.replace("--", "- -") + " -->")
@@ -87,15 +87,16 @@ def to_urdf(robot: Robot, params: Float[ArrayLike, " p"] | None = None, *,
     return "\n".join(lines) + "\n"
 
 
-def _checked(robot: Robot, params: Float[ArrayLike, " p"] | None) -> np.ndarray:
+def checked_params(robot: Robot, params: Float[ArrayLike, " p"] | None,
+                   what: str) -> np.ndarray:
     """``params`` (default ``robot.params``) as ``(n, 12)``, finite and physically
-    consistent."""
+    consistent, for ``what`` (``"a URDF"``) to hold."""
     p = np.asarray(robot.params if params is None else params, dtype=float)
     if p.shape != (robot.n_params,) or not np.all(np.isfinite(p)):
         raise ValueError(f"params must be {robot.n_params} finite numbers (12 per link) for "
                          f"robot {robot.name!r}, got shape {p.shape}")
     if not is_physically_consistent(p):
-        raise ValueError("a URDF needs physically consistent link parameters (positive mass, "
+        raise ValueError(f"{what} needs physically consistent link parameters (positive mass, "
                          "positive-definite pseudo-inertia per link): identify with "
                          "physical=True (--physical)")
     return p.reshape(robot.n_joints, N_LINK_PARAMETERS)
@@ -121,7 +122,7 @@ elements aside), is kept; ``comment`` is added
 
     from ._urdf import read_checked
 
-    p = _checked(robot, params)
+    p = checked_params(robot, params, "a URDF")
     read_checked(source)  # well-formed, no DTD or entity
     parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False,
                              remove_blank_text=False, remove_comments=False)

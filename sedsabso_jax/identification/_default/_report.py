@@ -24,6 +24,7 @@ from ..._output import (
 from ...measurements._container import Measurements
 from .._estimators._estimator import Limits
 from .._fit._identify import Identification
+from .._fit._simulator import SimulatorCheck
 from .._fit._uncertainty import relative_std_percent
 from .._metrics import (
     METRICS_NOTE,
@@ -154,6 +155,20 @@ class IdentificationReport:
     rests: Rests | None = None
     #: each held-out recording judged alone, in the order given
     validations: tuple[HeldOut, ...] = ()
+    #: the identified model written as MJCF and judged in MuJoCo, with its text
+    #: (:meth:`with_mjcf`), or None
+    simulator: SimulatorCheck | None = None
+    mjcf: str | None = None
+
+    def with_mjcf(self, **options) -> IdentificationReport:
+        """This report with the identification written as MJCF
+        (:meth:`~.._fit._identify.Identification.mjcf`, ``options`` its) and judged in
+        MuJoCo on the identification data and each held-out recording."""
+        xml = self.ident.mjcf(**options)
+        recordings = {"identification data": self.data,
+                      **{h.name: h.data for h in self.validations}}
+        check = SimulatorCheck.of(self.ident, xml, recordings, self.limits)
+        return dataclasses.replace(self, simulator=check, mjcf=xml)
 
     @classmethod
     def evaluate(cls, ident: Identification, data: Measurements | Sequence[Measurements],
@@ -262,6 +277,8 @@ class IdentificationReport:
                           ("choice", "`chosen` (the strongest pull within one standard error "
                            "of the lowest) or `lowest` (the lowest CV error)"))]
         lines += held_out_lines(self.validations, joints)
+        if self.simulator is not None:
+            lines += self.simulator.lines()
         if self.limits is None:
             lines += ["", "NRMS over torque limits: no limits known for this robot"]
         return "\n".join(lines)
@@ -286,6 +303,7 @@ class IdentificationReport:
             else self.extrapolation.as_dict(),
             "rests": None if self.rests is None else self.rests.as_dict(),
             "validations": held_out_document(self.validations),
+            "mujoco": None if self.simulator is None else self.simulator.as_dict(),
         })
 
     def figures(self) -> dict:
@@ -307,14 +325,17 @@ class IdentificationReport:
 
     def write(self, settings: dict, out_dir: PathLike | None = None,
               json_path: PathLike | None = None, urdf_path: PathLike | None = None,
-              urdf_source: PathLike | None = None) -> list[str]:
+              urdf_source: PathLike | None = None, mjcf_path: PathLike | None = None
+              ) -> list[str]:
         """Write the figures and ``identification.json`` into ``out_dir`` (created if
         missing), the JSON also to ``json_path`` and the identified robot's URDF to
-        ``urdf_path`` (``urdf_source`` updated, if given: :meth:`Identification.urdf`;
-        their directories created); everything is rendered before the first file is
+        ``urdf_path`` (``urdf_source`` updated, if given: :meth:`Identification.urdf`),
+        its MJCF (:meth:`with_mjcf`) to ``mjcf_path`` (their directories created); everything is rendered before the first file is
         written. Returns the paths written."""
         document = self.document(settings)
         urdf = self.ident.urdf(urdf_source) if urdf_path is not None else None
+        if mjcf_path is not None and self.mjcf is None:
+            raise ValueError("write the MJCF of a report made with_mjcf()")
         figures = self.figures() if out_dir is not None else {}
         written = []
         if out_dir is not None:
@@ -332,4 +353,8 @@ class IdentificationReport:
             os.makedirs(os.path.dirname(os.path.abspath(urdf_path)), exist_ok=True)
             write_text(urdf_path, urdf)
             written.append(os.fspath(urdf_path))
+        if mjcf_path is not None and self.mjcf is not None:
+            os.makedirs(os.path.dirname(os.path.abspath(mjcf_path)), exist_ok=True)
+            write_text(mjcf_path, self.mjcf)
+            written.append(os.fspath(mjcf_path))
         return written

@@ -22,6 +22,7 @@ from jaxtyping import ArrayLike, Float
 from ..._deprecation import caller_stacklevel
 from ..._output import jsonable
 from ..._version import __version__
+from ...dynamics._limits import JointLimits
 from ...dynamics._robot import Robot
 from ...dynamics._urdf_writer import to_urdf, update_urdf
 from ...optim._linear import factorize
@@ -118,6 +119,29 @@ class Identification:
         if source is not None:
             return update_urdf(source, self.model.robot, self.full_params, comment=comment)
         return to_urdf(self.model.robot, self.full_params, comment=comment)
+
+    def mjcf(self, *, limits: JointLimits | None = None, timestep: float = 0.002,
+             integrator: str = "implicitfast") -> str:
+        """The identified robot as a MuJoCo model (MJCF) that MuJoCo loads as written: a
+        physical fit's link parameters, each joint's ``damping`` (viscous),
+        ``frictionloss`` (Coulomb) and ``armature`` (a rotor inertia term), one torque
+        actuator per joint whose bias is the torque offset, so that ``ctrl`` is the
+        torque as measured (:func:`~sedsabso_jax.dynamics.to_mjcf`; ``limits``,
+        ``timestep``, ``integrator`` its). What MuJoCo has no parameter for is listed in
+        a comment (:func:`~._simulator.simulated`)."""
+        from ...dynamics._mjcf_writer import to_mjcf
+        from ._simulator import simulated
+
+        if self.full_params is None:
+            raise ValueError("an MJCF needs the full link parameters of a physically "
+                             "consistent fit: identify with PhysicallyConsistent(...) "
+                             "(--physical)")
+        held = simulated(self.model, self.values)
+        comment = (f"identified by sedsabso-jax {__version__} ({self.method}, physically "
+                   f"consistent, friction {self.model.friction}); {held.comment()}")
+        return to_mjcf(self.model.robot, self.full_params, armature=held.armature,
+                       offset=held.offset, limits=limits, timestep=timestep,
+                       integrator=integrator, comment=comment)
 
     def as_dict(self) -> dict:
         """Names, values (and their standard deviations), method, settings and fit

@@ -6,7 +6,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ._term import AbstractTerm, ModelView, Signals
+from ._term import AbstractTerm, Held, ModelView, Signals
 
 
 class Offset(AbstractTerm):
@@ -41,3 +41,11 @@ class Offset(AbstractTerm):
         E = np.zeros(batch + (n, n, R))  # joint j's row: its recording's indicator
         E[..., np.arange(n), np.arange(n), :] = share[..., None, :]
         return E.reshape(batch + (n, n * R))
+
+    held_in_full: ClassVar[bool] = True
+
+    def held(self, model: ModelView, values: np.ndarray) -> Held:
+        """The actuators' bias: each joint's offset (with one per recording, their mean,
+        as new motions get)."""
+        n = model.robot.n_joints
+        return Held(offset=np.asarray(values, float).reshape(n, -1).mean(axis=1))

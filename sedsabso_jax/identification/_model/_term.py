@@ -111,6 +111,18 @@ class Signals:
         return values if self.keep is None else values[self.keep]
 
 
+@dataclasses.dataclass(frozen=True, eq=False)
+class Held:
+    """What a rigid-body simulator (MuJoCo) holds of a term, per joint (``(n,)`` each,
+    None: nothing of that kind): the rotor inertia seen at the joint (``armature``), a
+    torque the actuators subtract from the measured one (``offset``); ``lost``: what of
+    the term it cannot hold, in words (empty: nothing)."""
+
+    armature: np.ndarray | None = None
+    offset: np.ndarray | None = None
+    lost: str = ""
+
+
 class ModelView(Protocol):
     """What a term reads of its torque model (:class:`~._torque_model.TorqueModel`)."""
 
@@ -180,6 +192,18 @@ class AbstractTerm(eqx.Module):
         """The term with its searched parameters at ``values`` (floats; or traced values
         inside a compiled search, taken as they are)."""
         raise ValueError(f"term {self.name!r} has no parameters to search")
+
+    def held(self, model: ModelView, values: np.ndarray) -> Held | None:
+        """What a rigid-body simulator holds of this term with its coefficients ``values``
+        (one per name), or None where it holds none of it (the term is then left out of
+        a simulator's model, :meth:`~.._fit._identify.Identification.mjcf`)."""
+        return None
+
+    @property
+    def held_in_full(self) -> bool:
+        """Whether :meth:`held` keeps the whole term (at most a transmission's coupling
+        lost): a model made to be written for a simulator has only such terms."""
+        return False
 
     @property
     def waiting(self) -> bool:

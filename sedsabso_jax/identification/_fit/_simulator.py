@@ -1,0 +1,142 @@
+"""An identification as a rigid-body simulator holds it (MuJoCo: link inertias, joint
+``damping``, ``frictionloss`` and ``armature``, an actuator bias): what each term gives it
+(:meth:`~.._model._term.AbstractTerm.held`) and what is left out, said in words."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .._model._torque_model import TorqueModel
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Simulated:
+    """The joint-space quantities beyond the links' 12 parameters a simulator holds
+    (``armature``, ``offset``, each ``(n,)``) and what it cannot hold: ``left_out`` a line
+    per term or part of a term (its ``--friction`` word, then what)."""
+
+    armature: np.ndarray
+    offset: np.ndarray
+    left_out: tuple[str, ...]
+
+    def comment(self) -> str:
+        """One line for a model file."""
+        return ("not held by the simulator (left out): " + "; ".join(self.left_out)
+                if self.left_out else "every term of the model is held")
+
+
+def term_values(model: TorqueModel, values: np.ndarray) -> list[np.ndarray]:
+    """Each term's coefficients (one per its names) from the model's ``values``; a column
+    the base spans (regrouped) is 0: the base parameters hold it."""
+    index = {name: k for k, name in enumerate(model.names)}
+    values = np.asarray(values, dtype=float)
+    return [np.array([values[index[name]] if name in index else 0.0
+                      for name in term.names(model)]) for term in model.terms]
+
+
+def simulated(model: TorqueModel, values: np.ndarray) -> Simulated:
+    """What a simulator holds of ``model`` at ``values`` (its terms beyond the links)."""
+    n = model.robot.n_joints
+    armature, offset, left_out = np.zeros(n), np.zeros(n), []
+    for term, coefficients in zip(model.terms, term_values(model, values)):
+        held = term.held(model, coefficients)
+        if held is None:
+            names = term.names(model)
+            shown = ", ".join(f"{k} = {v:.4g}" for k, v in zip(names, coefficients))
+            left_out.append(f"{term.text}" + (f" ({shown})" if shown else ""))
+            continue
+        if held.armature is not None:
+            armature = armature + held.armature
+        if held.offset is not None:
+            offset = offset + held.offset
+        if held.lost:
+            left_out.append(f"{term.text}: {held.lost}")
+    return Simulated(armature, offset, tuple(left_out))
+
+
+def mujoco_torques(xml: str, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray
+                   ) -> np.ndarray:
+    """The joint torques ``(T, n)`` as measured (each actuator's ``ctrl``) that MuJoCo's
+    inverse dynamics (``mj_inverse``) gives for the MJCF ``xml`` (one joint, one
+    actuator of fixed gain and affine bias per joint, as :func:`~sedsabso_jax.dynamics.to_mjcf`
+    writes) at the states ``(T, n)``."""
+    mujoco = import_mujoco()
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    dof = m.jnt_dofadr[m.actuator_trnid[:, 0]]
+    q, qd, qdd = (np.asarray(a, dtype=float) for a in (q, qd, qdd))
+    out = np.empty((len(q), m.nu))
+    for k in range(len(q)):
+        d.qpos[:], d.qvel[:], d.qacc[:] = q[k], qd[k], qdd[k]
+        mujoco.mj_inverse(m, d)
+        out[k] = d.qfrc_inverse[dof]
+    # force = gain ctrl + bias0 (no position or velocity bias written)
+    return (out - m.actuator_biasprm[:, 0]) / m.actuator_gainprm[:, 0]
+
+
+def import_mujoco():
+    """The ``mujoco`` module, or an ImportError that says how to install it."""
+    try:
+        import mujoco
+    except ImportError:
+        raise ImportError("MuJoCo's model needs the mujoco package: "
+                          "pip install 'sedsabso-jax[mujoco]'") from None
+    return mujoco
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class SimulatorCheck:
+    """A written MJCF judged in MuJoCo: for each data set (``rows``: name, the package's
+    own error, MuJoCo's inverse dynamics' error, in ``measure``), what was left out
+    (``left_out``)."""
+
+    measure: str
+    rows: tuple[tuple[str, float, float], ...]
+    left_out: tuple[str, ...]
+
+    @classmethod
+    def of(cls, ident, xml: str, recordings: dict, limits=None) -> SimulatorCheck:
+        """``ident``'s MJCF ``xml`` against its own prediction on each recording
+        (``{name: Measurements}``, new motions: their offsets' mean), by the NRMS over
+        the torque limits (or the relative RMS error without limits)."""
+        from .._metrics import validation_metrics
+
+        measure = ("nrms_limits_percent" if limits is not None
+                   else "relative_rms_percent_overall")
+        rows = []
+        for name, d in recordings.items():
+            own = ident.predict(d.q, d.qd, d.qdd)
+            written = mujoco_torques(xml, d.q, d.qd, d.qdd)
+            rows.append((name, float(validation_metrics(d.tau, own, limits)[measure]),
+                         float(validation_metrics(d.tau, written, limits)[measure])))
+        return cls(measure, tuple(rows), simulated(ident.model, ident.values).left_out)
+
+    def lines(self) -> list[str]:
+        """The report's section."""
+        from ..._output import markdown_table
+
+        table = markdown_table(["data", "own [%]", "MuJoCo [%]", "MuJoCo / own"],
+                               [[n, f"{a:.4f}", f"{b:.4f}", f"{b / a:.3f}"]
+                                for n, a, b in self.rows])
+        return ["", f"the written MJCF in MuJoCo (`mj_inverse`), error `{self.measure}` "
+                    "against the package's own prediction:", "", table, "",
+                "left out (MuJoCo has no parameter for it): "
+                + ("; ".join(self.left_out) if self.left_out else "nothing")]
+
+    def as_dict(self) -> dict:
+        return {"measure": self.measure, "left_out": list(self.left_out),
+                "rows": [{"data": n, "own": a, "mujoco": b} for n, a, b in self.rows]}
+
+
+def held_frictions(frictions):
+    """The candidate term sets (each a tuple of terms) with only the terms a simulator
+    holds in full (:attr:`~.._model._term.AbstractTerm.held_in_full`), each set once: the
+    candidates of a model made to be written for MuJoCo (a smooth Coulomb becomes
+    MuJoCo's dry friction, a load friction is dropped)."""
+    kept: dict[str, tuple] = {}
+    for terms in frictions:
+        held = tuple(t for t in terms if t.held_in_full)
+        kept.setdefault("+".join(t.text for t in held), held)
+    return tuple(kept.values())

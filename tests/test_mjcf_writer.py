@@ -1,0 +1,140 @@
+"""MJCF out: the identified robot as a MuJoCo model that MuJoCo loads as written, whose
+inverse dynamics (MuJoCo's own, ``mj_inverse``) are the package's: the links, armature,
+viscous friction, the torque offset in the actuators' bias, and dry friction that acts as
+Coulomb's once the joint slides."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+from conftest import random_dh
+
+import sedsabso_jax as sj
+from sedsabso_jax import cli
+from sedsabso_jax.dynamics._mjcf_writer import to_mjcf
+from sedsabso_jax.identification._default._policy import DEFAULT
+from sedsabso_jax.identification._fit._simulator import held_frictions, mujoco_torques
+
+mujoco = pytest.importorskip("mujoco")
+
+
+def _robot(rng, n=4, friction=True):
+    t, params = random_dh(rng, n, prismatic_prob=0.3)
+    if not friction:
+        params[10::12] = 0.0
+    return sj.robots.from_dh(t["d"], t["a"], t["alpha"], t["theta"], prismatic=t["prismatic"],
+                             params=params, gravity=9.81 * np.array([0.3, -0.2, -0.93]))
+
+
+def test_written_model_has_the_package_dynamics(rng):
+    """Links (standard DH: axes off the link origins, prismatic joints), armature, damping
+    and the offset through the actuators: MuJoCo's inverse dynamics and its actuator
+    force are the package's to 1e-9 of the largest torque."""
+    robot = _robot(rng, friction=False)
+    armature, offset = rng.uniform(0.0, 0.5, 4), rng.normal(size=4)
+    xml = to_mjcf(robot, armature=armature, offset=offset)
+    q, qd, qdd = rng.uniform(-2, 2, (3, 10, 4))
+    ours = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd)) + armature * qdd
+    measured = mujoco_torques(xml, q, qd, qdd)  # ctrl: the torque as a sensor reads it
+    scale = np.abs(ours).max()
+    np.testing.assert_allclose(measured, ours + offset, atol=1e-9 * scale)
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    d.ctrl[:] = ours[0] + offset
+    mujoco.mj_forward(m, d)
+    np.testing.assert_allclose(d.qfrc_actuator, ours[0], atol=1e-12 * scale)
+    assert m.nu == 4 and list(m.actuator_trntype) == [mujoco.mjtTrn.mjTRN_JOINT] * 4
+
+
+def test_dry_friction_is_coulomb_once_sliding(rng):
+    """MuJoCo's frictionloss is a soft constraint; the writer's impedance makes its torque
+    ``Fc sign(qd)`` (to 1 %) once a joint moves at 0.05 rad/s or more, on a chain whose
+    first joint turns an arm stretched along its axis (a large inverse weight at qpos0,
+    where MuJoCo's default impedance leaves most of the friction out)."""
+    robot = sj.robots.kuka_lwr4()
+    p = np.asarray(robot.params).copy()
+    p[11::12] = 0.0
+    p[10::12] = 0.5
+    xml = to_mjcf(robot, p)
+    q = rng.uniform(-1, 1, (200, 7))
+    qd = rng.choice([-1, 1], (200, 7)) * rng.uniform(0.05, 2.0, (200, 7))
+    qdd = rng.normal(size=(200, 7))
+    friction = mujoco_torques(xml, q, qd, qdd) - mujoco_torques(
+        xml.replace('frictionloss="0.5"', 'frictionloss="0.0"'), q, qd, qdd)
+    np.testing.assert_allclose(friction, 0.5 * np.sign(qd), rtol=0.01)
+
+
+def test_bad_inputs_are_refused(rng):
+    robot = _robot(rng)
+    with pytest.raises(ValueError, match="physically consistent link parameters"):
+        to_mjcf(sj.robots.rs010n())  # Table 2: Ixx2 = -10.02
+    with pytest.raises(ValueError, match="armature must be 4 finite numbers"):
+        to_mjcf(robot, armature=[1.0, 2.0])
+    with pytest.raises(ValueError, match="armature must be >= 0"):
+        to_mjcf(robot, armature=[0.1, -0.1, 0.0, 0.0])
+    with pytest.raises(ValueError, match="integrator must be one of"):
+        to_mjcf(robot, integrator="rk4")
+
+
+def test_identified_model_and_what_is_left_out(rng):
+    """An identification with offsets and armature (held) and Coulomb friction under load
+    (not held): the MJCF's torques in MuJoCo are the fit's without the load friction;
+    the file names what is left out with its values."""
+    robot = _robot(rng, n=3)
+    q = rng.uniform(-2, 2, (400, 3))
+    qd = rng.choice([-1, 1], (400, 3)) * rng.uniform(0.2, 2.0, (400, 3))
+    qdd = rng.normal(size=(400, 3))
+    tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd)) \
+        + [0.3, -0.2, 0.1] + 0.05 * qdd
+    data = sj.Measurements(np.arange(400) / 100.0, q, qd, qdd, tau)
+    terms = (sj.Offset(), sj.Armature(), sj.LoadFriction())
+    with warnings.catch_warnings():  # a first joint's armature is in the base: regrouped
+        warnings.filterwarnings("ignore", "identify: IA1 cannot be identified")
+        fit = sj.identify(robot, data, sj.PhysicallyConsistent(sj.OLS()),
+                          sj.TorqueModel.of(robot, terms))
+    xml = fit.mjcf()
+    assert "left out" in xml and "load (FL1 = " in xml
+    names, values = list(fit.names), np.asarray(fit.values)
+    load = [names.index(f"FL{j}") for j in (1, 2, 3)]
+    without_load = np.where(np.isin(np.arange(len(values)), load), 0.0, values)
+    expected = fit.model.predict(without_load, q, qd, qdd)
+    np.testing.assert_allclose(mujoco_torques(xml, q, qd, qdd), expected,
+                               atol=0.01 * np.abs(expected).max())
+    m = mujoco.MjModel.from_xml_string(xml)
+    np.testing.assert_allclose(m.actuator_biasprm[:, 0],
+                               -values[[names.index(f"OFF{j}") for j in (1, 2, 3)]])
+    assert np.all(m.dof_armature >= 0)
+
+
+def test_mujoco_candidates_hold_every_term():
+    """--mujoco-terms: the default's candidates with only the terms MuJoCo holds, each
+    once (a smooth Coulomb is MuJoCo's dry friction, a load friction is dropped)."""
+    texts = ["+".join(t.text for t in terms) for terms in held_frictions(DEFAULT.frictions)]
+    assert texts == ["", "offset", "offset+armature"]
+
+
+def test_identify_mjcf_out(tmp_path, capsys):
+    """`identify --mjcf-out`: a physically consistent fit written as MJCF that MuJoCo
+    loads, the report's MuJoCo section (its error beside the package's own) in the text
+    and the JSON; --no-physical contradicts it."""
+    m = sj.load_kuka_lwr4(1).slice(0, 1500)
+    data = m.save(tmp_path / "m.npz")
+    out, js = tmp_path / "out" / "kuka.xml", tmp_path / "r.json"
+    argv = ["identify", "--robot", "kuka_lwr4", "--data", str(data), "--method", "OLS",
+            "--weights", "equal", "--friction", "viscous-coulomb+offset", "--folds", "0", "--mjcf-out", str(out),
+            "--json", str(js)]
+    assert cli.main(argv) == 0
+    text = capsys.readouterr().out
+    assert "the written MJCF in MuJoCo" in text and "left out (MuJoCo has no parameter " \
+        "for it): nothing" in text
+    model = mujoco.MjModel.from_xml_path(str(out))
+    assert model.nu == 7 and model.opt.timestep == pytest.approx(1 / m.rate)
+    row, = json.loads(js.read_text())["mujoco"]["rows"]
+    assert row["mujoco"] == pytest.approx(row["own"], rel=0.01)
+    out.unlink()
+    assert cli.main([*argv, "--no-physical"]) == 2
+    assert "--mjcf-out needs physically consistent" in capsys.readouterr().err
+    assert not out.exists()
