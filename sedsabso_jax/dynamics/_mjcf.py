@@ -249,14 +249,22 @@ def _joint_ids(mujoco: Any, m: Any, path: str, joint_names: Sequence[str]) -> li
 
 def _armature(mujoco: Any, m: Any, path: str, joint_names: Sequence[str]) -> np.ndarray:
     ids = _joint_ids(mujoco, m, path, joint_names)
-    return np.array([float(m.dof_armature[m.jnt_dofadr[j]]) for j in ids])
+    armature = np.array([float(m.dof_armature[m.jnt_dofadr[j]]) for j in ids])
+    rotor = getattr(m, "actuator_armature", None)  # MuJoCo >= 4: an actuator's, motor side
+    for a in range(m.nu if rotor is not None else 0):
+        if m.actuator_trntype[a] == int(mujoco.mjtTrn.mjTRN_JOINT) and \
+                m.actuator_trnid[a, 0] in ids:
+            k = ids.index(int(m.actuator_trnid[a, 0]))
+            armature[k] += float(m.actuator_gear[a, 0]) ** 2 * float(rotor[a])
+    return armature
 
 
 def armature_from_mjcf(path: PathLike, robot: Robot) -> Float[np.ndarray, " n"]:
-    """The ``armature`` of ``robot``'s joints in an MJCF file (kg m^2 or kg, joint side):
-    MuJoCo adds ``armature * qdd`` to the rigid body's torque, as the
-    :class:`~sedsabso_jax.Armature` term does with ``IA`` and no transmission. The joints
-    are found by ``robot.joint_names``."""
+    """The armature of ``robot``'s joints in an MJCF file (kg m^2 or kg, joint side): the
+    joint's ``armature`` plus, for each actuator driving it directly (MuJoCo >= 4), its
+    ``armature`` times ``gear^2``. MuJoCo adds ``armature * qdd`` to the rigid body's
+    torque, as the :class:`~sedsabso_jax.Armature` term does with ``IA`` and no
+    transmission. The joints are found by ``robot.joint_names``."""
     mujoco, m, path = _compile(path)
     return _armature(mujoco, m, path, robot.joint_names)
 
