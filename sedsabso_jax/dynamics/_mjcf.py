@@ -250,8 +250,9 @@ def _joint_ids(mujoco: Any, m: Any, path: str, joint_names: Sequence[str]) -> li
 def _armature(mujoco: Any, m: Any, path: str, joint_names: Sequence[str]) -> np.ndarray:
     ids = _joint_ids(mujoco, m, path, joint_names)
     armature = np.array([float(m.dof_armature[m.jnt_dofadr[j]]) for j in ids])
-    rotor = getattr(m, "actuator_armature", None)  # MuJoCo >= 4: an actuator's, motor side
-    for a in range(m.nu if rotor is not None else 0):
+    # MuJoCo >= 4: an actuator's armature too, motor side
+    rotor: Any = getattr(m, "actuator_armature", np.zeros(m.nu))
+    for a in range(m.nu):
         if m.actuator_trntype[a] == int(mujoco.mjtTrn.mjTRN_JOINT) and \
                 m.actuator_trnid[a, 0] in ids:
             k = ids.index(int(m.actuator_trnid[a, 0]))
