@@ -64,7 +64,7 @@ def write(tmp_path, text, name="arm.xml"):
 
 
 # ----------------------------------------------------------------- random serial chains
-@pytest.mark.parametrize("seed,n", [(0, 1), (1, 4), (2, 7)])
+@pytest.mark.parametrize("seed,n", [(1, 4), (2, 7)])
 def test_random_chain_equals_mj_inverse(tmp_path, seed, n):
     rng = np.random.default_rng(seed)
     path = write(tmp_path, random_mjcf(rng, n, damping=True, fixed_prob=0.5))
@@ -283,7 +283,7 @@ def test_published_urdf_through_mujoco(tmp_path, robots_dir, name, file, tip):
 def test_command_line_reads_mjcf(tmp_path, capsys):
     from sedsabso_jax.cli import main
 
-    path = write(tmp_path, random_mjcf(np.random.default_rng(10), 2, damping=True))
+    path = write(tmp_path, random_mjcf(np.random.default_rng(10), 1, damping=True))
     assert main(["base-parameters", "--robot", str(path)]) == 0
     assert "random:" in capsys.readouterr().out
     assert main(["base-parameters", "--robot", str(tmp_path / "missing.xml")]) == 2
