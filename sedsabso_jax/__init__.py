@@ -38,6 +38,7 @@ if TYPE_CHECKING:
     from .dynamics._inertia import is_physically_consistent as is_physically_consistent
     from .dynamics._kinematics import forward_kinematics as forward_kinematics
     from .dynamics._limits import JointLimits as JointLimits
+    from .dynamics._limits import joint_limits_from_mjcf as joint_limits_from_mjcf
     from .dynamics._limits import joint_limits_from_urdf as joint_limits_from_urdf
     from .dynamics._regressor import inverse_dynamics as inverse_dynamics
     from .dynamics._regressor import regressor as regressor
@@ -114,7 +115,8 @@ __all__ = [
     "__version__", "Float64Required", "baselines", "compare", "dynamics", "excitation",
     "identification", "measurements", "optim", "paper", "reproduce", "robots", "Robot",
     "regressor", "inverse_dynamics", "forward_kinematics", "base_parameters",
-    "BaseParameters", "JointLimits", "joint_limits_from_urdf", "is_physically_consistent",
+    "BaseParameters", "JointLimits", "joint_limits_from_urdf", "joint_limits_from_mjcf",
+    "is_physically_consistent",
     "Measurements", "load_measurements", "load_kuka_lwr4", "simulate_measurements",
     "simulate_measurements_along", "Transmission", "FourierTrajectory", "design_excitation",
     "minimise", "AbstractSolver", "SEDSABSO", "BSO", "LDWPSO", "Evosax", "BlackBox",

@@ -80,11 +80,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                               "sedsabso-jax base-parameters --robot arm.urdf --tip tool0 "
                               "--json -"])
     robot = bp.add_argument_group("robot")
-    robot.add_argument("--robot", metavar="NAME|URDF", default="rs010n",
-                       help=f"one of {', '.join(BUILTIN_ROBOTS)} or a .urdf file (default "
-                       f"rs010n)")
+    robot.add_argument("--robot", metavar="NAME|FILE", default="rs010n",
+                       help=f"one of {', '.join(BUILTIN_ROBOTS)} , a .urdf file or a "
+                       f"MuJoCo MJCF .xml file (default rs010n)")
     robot.add_argument("--tip", metavar="LINK", default=None,
-                       help="URDF tip link, for trees that branch")
+                       help="URDF tip link (MJCF: tip body), for trees that branch")
     out = bp.add_argument_group("outputs")
     out.add_argument("--json", default=None, metavar="PATH",
                      help="also write the base parameters as JSON to PATH (written "

@@ -56,7 +56,8 @@ def refuse_overwriting(outputs: dict[str, str | None], inputs: Sequence[tuple[st
     for k, (flag, path) in enumerate(given):
         for in_flag, in_path in inputs:
             if same(path, in_path):
-                what = "URDF (--robot)" if in_flag == "--robot" else f"{in_flag} {in_path}"
+                kind = "MJCF" if in_path.lower().endswith(".xml") else "URDF"
+                what = f"{kind} (--robot)" if in_flag == "--robot" else f"{in_flag} {in_path}"
                 raise ValueError(f"{flag} {path} is the input {what}: write the results to "
                                  f"another file")
         for other, other_path in given[k + 1:]:
@@ -84,8 +85,8 @@ def check_signals(spec: str, robot: Robot,
                   groups: Sequence[Sequence[Measurements | None]], *,
                   torques: bool = True) -> None:
     """The recordings' positions, speeds and (``torques``) torques against the joint
-    limits of ``--robot spec`` (a URDF's ``<limit>``, the built-in robots' tables; None
-    entries: no recording):
+    limits of ``--robot spec`` (a URDF's ``<limit>``, an MJCF's ranges, the built-in
+    robots' tables; None entries: no recording):
     :func:`~sedsabso_jax.identification._data_checks.check_limits`."""
     from ..dynamics._limits import joint_limits
     from ..identification._data_checks import check_limits
@@ -93,7 +94,7 @@ def check_signals(spec: str, robot: Robot,
     with warnings.catch_warnings():  # a continuous joint's missing limit: said elsewhere
         warnings.simplefilter("ignore")
         limits = joint_limits(spec, robot)
-    where = (f" in {os.path.basename(spec)}" if spec.lower().endswith(".urdf")
+    where = (f" in {os.path.basename(spec)}" if spec.lower().endswith((".urdf", ".xml"))
              else f" of --robot {spec}")
     for data in groups:
         check_limits(robot, [d for d in data if d is not None], limits, where,
@@ -102,9 +103,9 @@ def check_signals(spec: str, robot: Robot,
 
 def inputs_of(args: argparse.Namespace, *flags: str) -> list[tuple[str, str]]:
     """``(flag, path)`` of each input file the ``flags`` give (one path or several), and
-    ``--robot``'s where it is a URDF file."""
+    ``--robot``'s where it is a URDF or MJCF file."""
     found = [("--robot", args.robot)] if str(getattr(args, "robot", "")).lower().endswith(
-        ".urdf") else []
+        (".urdf", ".xml")) else []
     for flag in flags:
         value = getattr(args, flag.lstrip("-").replace("-", "_"), None)
         for path in [value] if isinstance(value, str) else value or []:

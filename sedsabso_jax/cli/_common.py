@@ -229,17 +229,18 @@ INPUT_FLAGS = {"data": "--data", "validate": "--validate", "loaded": "--loaded"}
 
 def check_files(args: argparse.Namespace) -> None:
     """Fail at once, before JAX or the library is imported, when a file a flag names
-    (:data:`INPUT_FLAGS`, a ``--robot`` URDF, a ``--drive-gains`` JSON file) cannot be
+    (:data:`INPUT_FLAGS`, a ``--robot`` URDF or MJCF, a ``--drive-gains`` JSON file) cannot be
     read or an output (``--out``, ``--json``, ``--urdf-out``) cannot be written."""
     for dest, flag in INPUT_FLAGS.items():
         paths = getattr(args, dest, None)
         for path in [paths] if isinstance(paths, str) else paths or ():
             _readable(flag, path, "file")
     robot = getattr(args, "robot", None)
-    if isinstance(robot, str) and robot.lower().endswith(".urdf"):
+    if isinstance(robot, str) and robot.lower().endswith((".urdf", ".xml")):
         if not os.path.isfile(robot):  # the words of the robot's loader
             raise ValueError(f"--robot: no such file {robot!r}")
-        _readable("--robot", robot, "URDF file")
+        _readable("--robot", robot, "URDF file" if robot.lower().endswith(".urdf")
+                  else "MJCF file")
     gains = getattr(args, "drive_gains", None)
     if isinstance(gains, str) and gains.lower().endswith(".json"):
         _readable("--drive-gains", gains, "JSON file ('identify-gains --json' writes it)")
@@ -257,5 +258,5 @@ def _readable(flag: str, path: str, expected: str) -> None:
         raise PermissionError(f"{flag} {path}: the file cannot be read (permissions)")
 
 
-#: The robots ``--robot`` knows by name (else a URDF file).
+#: The robots ``--robot`` knows by name (else a URDF or MJCF file).
 BUILTIN_ROBOTS = ("rs010n", "kuka_lwr4", "staubli_tx40", "franka_panda")

@@ -134,10 +134,11 @@ def load_all(paths: Sequence[str], load: dict[str, Any], motor_side: bool,
 
 def add_robot(group: argparse._ArgumentGroup) -> None:
     """``--robot`` and ``--tip``."""
-    group.add_argument("--robot", metavar="NAME|URDF", required=True,
-                       help=f"one of {', '.join(BUILTIN_ROBOTS)} or a .urdf file")
+    group.add_argument("--robot", metavar="NAME|FILE", required=True,
+                       help=f"one of {', '.join(BUILTIN_ROBOTS)}, a .urdf file or a MuJoCo "
+                       "MJCF .xml file")
     group.add_argument("--tip", metavar="LINK", default=None,
-                       help="URDF tip link, for trees that branch")
+                       help="URDF tip link (MJCF: tip body), for trees that branch")
 
 
 def add_loading(group: argparse._ArgumentGroup) -> None:

@@ -2,8 +2,8 @@
 exact regressor, base parameters), which knows nothing of optimisers, measurements or
 identification. The common names (``Robot``, ``regressor``, ``inverse_dynamics``,
 ``forward_kinematics``, ``base_parameters``, ``BaseParameters``, ``JointLimits``,
-``joint_limits_from_urdf``, ``is_physically_consistent``) are ``sedsabso_jax``'s; the
-built-in robots are :mod:`sedsabso_jax.robots`."""
+``joint_limits_from_urdf``, ``joint_limits_from_mjcf``, ``is_physically_consistent``)
+are ``sedsabso_jax``'s; the built-in robots are :mod:`sedsabso_jax.robots`."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ from ._inertia import params_from_com as params_from_com
 from ._inertia import pseudo_inertia as pseudo_inertia
 from ._kinematics import link_poses as link_poses
 from ._limits import joint_limits as joint_limits
+from ._mjcf import MJCFError as MJCFError
 from ._regressor import chunk_size as chunk_size
 from ._regressor import unchecked_regressor as unchecked_regressor
 from ._robot import LINK_PARAMETERS as LINK_PARAMETERS
@@ -23,7 +24,8 @@ from ._urdf_writer import to_urdf as to_urdf
 from ._urdf_writer import update_urdf as update_urdf
 
 __all__ = [
-    "URDFError", "unchecked_regressor", "chunk_size", "random_states", "joint_limits",
+    "URDFError", "MJCFError", "unchecked_regressor", "chunk_size", "random_states",
+    "joint_limits",
     "pseudo_inertia", "from_pseudo_inertia", "params_from_com", "to_urdf", "update_urdf",
     "link_poses", "fixed_link_pose",
     "LINK_PARAMETERS", "N_LINK_PARAMETERS",

@@ -1,5 +1,5 @@
 """Joint limits in SI units: positions, speeds, accelerations and efforts, from the
-paper's Table 3 (RS010N) or a URDF's ``<limit>`` tags."""
+paper's Table 3 (RS010N), a URDF's ``<limit>`` tags or an MJCF's ranges."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .._output import PathLike
 from ..paper import TABLE3_DEG
+from ._mjcf import joint_limit_rows as mjcf_limit_rows
 from ._robot import Robot
 from ._robots import kuka_lwr4_urdf, staubli_tx40_urdf
 from ._urdf import joint_limit_rows
@@ -126,6 +127,27 @@ def joint_limits_from_urdf(path: PathLike, robot: Robot, *,
                        angular=[t == "revolute" for t in robot.joint_types])
 
 
+def joint_limits_from_mjcf(path: PathLike, robot: Robot, *,
+                           qdd_max: Float[ArrayLike, ""] | _PerJoint | None = None
+                           ) -> JointLimits:
+    """Limits of ``robot``'s joints from an MJCF file (compiled by MuJoCo): ``range``
+    where the joint is limited (else unbounded), and as ``tau_max`` the largest force the
+    joint's actuators apply: the joint's ``actuatorfrcrange``, else its actuators'
+    ``forcerange`` or, for a motor, ``ctrlrange`` times ``gear`` (else nan). MJCF has no
+    speed or acceleration limit: ``qd_max`` is ``inf`` and ``qdd_max`` (scalar or
+    ``(n,)``) is taken from the argument, ``inf`` by default. The joints are found by
+    ``robot.joint_names``."""
+    rows = mjcf_limit_rows(path, robot.joint_names)
+    n = robot.n_joints
+    qdd = np.full(n, np.inf) if qdd_max is None else np.asarray(qdd_max, dtype=float)
+    if qdd.shape not in ((), (n,)):
+        raise ValueError(f"qdd_max must be a scalar or have shape ({n},) for robot "
+                         f"{robot.name!r}, got {qdd.shape}")
+    return JointLimits(rows[:, 0], rows[:, 1], np.full(n, np.inf), np.broadcast_to(qdd, (n,)),
+                       rows[:, 2], names=robot.joint_names,
+                       angular=[t == "revolute" for t in robot.joint_types])
+
+
 #: The Franka Emika Panda's joint limits from Franka's robot and interface specifications
 #: (rad, rad/s, rad/s^2, N m).
 FRANKA_PANDA_LIMITS = {
@@ -141,13 +163,16 @@ def joint_limits(spec: str, robot: Robot) -> JointLimits:
     """The limits of a robot named as on the command line (see
     :func:`sedsabso_jax.robots.load`): ``"rs010n"`` the paper's Table 3 (no efforts),
     ``"franka_panda"`` :data:`FRANKA_PANDA_LIMITS`, ``"kuka_lwr4"`` and
-    ``"staubli_tx40"`` their vendored URDFs, a ``.urdf`` path that file."""
+    ``"staubli_tx40"`` their vendored URDFs, a ``.urdf`` or MJCF ``.xml`` path that
+    file."""
     if spec == "rs010n":
         return JointLimits.rs010n()
     if spec == "franka_panda":
         # mypy sees one value type for every key of the dict, angular's included
         return JointLimits(**FRANKA_PANDA_LIMITS,  # type: ignore[arg-type]
                            names=robot.joint_names)
+    if str(spec).lower().endswith(".xml"):
+        return joint_limits_from_mjcf(spec, robot)
     urdf = {"kuka_lwr4": kuka_lwr4_urdf, "staubli_tx40": staubli_tx40_urdf}.get(spec)
     with urdf() if urdf else contextlib.nullcontext(spec) as path:
         return joint_limits_from_urdf(path, robot)

@@ -16,6 +16,7 @@ from jaxtyping import ArrayLike, Bool, Float
 from ..paper import TABLE2
 from . import _spatial as sp
 from ._robot import N_LINK_PARAMETERS, STANDARD_GRAVITY, Robot
+from ._mjcf import from_mjcf
 from ._urdf import from_urdf
 
 __all__ = ["BUILTIN", "franka_panda", "from_dh", "from_mdh", "from_urdf", "kuka_lwr4",
@@ -183,16 +184,20 @@ BUILTIN = {"rs010n": rs010n, "kuka_lwr4": kuka_lwr4, "staubli_tx40": staubli_tx4
 
 
 def load(spec: str, tip: str | None = None) -> Robot:
-    """A robot named as on the command line: one of :data:`BUILTIN` or a ``.urdf`` file
-    (``tip``: the URDF's tip link, for trees that branch)."""
+    """A robot named as on the command line: one of :data:`BUILTIN`, a ``.urdf`` file or
+    a MuJoCo MJCF ``.xml`` file (``tip``: the file's tip link or body, for trees that
+    branch)."""
     if spec in BUILTIN:
         if tip is not None:
-            raise ValueError(f"--tip applies to URDF files, not to the built-in robot {spec!r}")
+            raise ValueError(f"--tip applies to URDF files (and MJCF files), not to the "
+                             f"built-in robot {spec!r}")
         return BUILTIN[spec]()
-    if not str(spec).lower().endswith(".urdf"):
-        raise ValueError(f"--robot must be one of {tuple(BUILTIN)} or a .urdf file, got "
-                         f"{spec!r}")
+    if not str(spec).lower().endswith((".urdf", ".xml")):
+        raise ValueError(f"--robot must be one of {tuple(BUILTIN)}, a .urdf file or an MJCF "
+                         f".xml file, got {spec!r}")
     if not os.path.isfile(spec):
         raise ValueError(f"--robot: no such file {spec!r}")
+    if str(spec).lower().endswith(".xml"):
+        return from_mjcf(spec, tip=tip)  # imports mujoco
     return from_urdf(spec, tip=tip)
 
