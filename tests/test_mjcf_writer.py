@@ -49,6 +49,22 @@ def test_written_model_has_the_package_dynamics(rng):
     assert m.nu == 4 and list(m.actuator_trntype) == [mujoco.mjtTrn.mjTRN_JOINT] * 4
 
 
+def test_written_model_reads_back(rng, tmp_path):
+    """The package's MJCF reader (MuJoCo's compiled model) gives back the written chain:
+    torques, friction and armature."""
+    robot = _robot(rng)
+    armature = rng.uniform(0.0, 0.5, 4)
+    path = tmp_path / "r.xml"
+    path.write_text(to_mjcf(robot, armature=armature))
+    with pytest.warns(UserWarning, match="armature"):
+        back = sj.robots.from_mjcf(path)
+    q, qd, qdd = rng.uniform(-2, 2, (3, 10, 4))
+    ours = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
+    np.testing.assert_allclose(np.asarray(sj.inverse_dynamics(back, back.params, q, qd, qdd)),
+                               ours, atol=1e-9 * np.abs(ours).max())
+    np.testing.assert_allclose(sj.robots.armature_from_mjcf(path, back), armature, atol=1e-15)
+
+
 def test_dry_friction_is_coulomb_once_sliding(rng):
     """MuJoCo's frictionloss is a soft constraint; the writer's impedance makes its torque
     ``Fc sign(qd)`` (to 1 %) once a joint moves at 0.05 rad/s or more, on a chain whose

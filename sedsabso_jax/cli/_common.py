@@ -197,11 +197,13 @@ non_negative_float = number(float, 0, strict=False)
 
 
 def check_writable(out_dir: PathLike | None, json_path: PathLike | None,
-                   urdf_path: PathLike | None = None) -> None:
+                   urdf_path: PathLike | None = None, mjcf_path: PathLike | None = None
+                   ) -> None:
     """Fail before the (long) run, not after it, when an output cannot be written: a file
     is made and removed where each output goes (its nearest existing directory), as
     permissions alone do not tell (root's, a read-only or virtual file system's)."""
-    for flag, path in (("--out", out_dir), ("--json", json_path), ("--urdf-out", urdf_path)):
+    files = (("--json", json_path), ("--urdf-out", urdf_path), ("--mjcf-out", mjcf_path))
+    for flag, path in (("--out", out_dir), *files):
         if path is None:
             continue
         existing = os.path.abspath(path if flag == "--out" else os.path.dirname(
@@ -217,7 +219,7 @@ def check_writable(out_dir: PathLike | None, json_path: PathLike | None,
         except OSError as err:
             raise ValueError(f"{flag} {path!r}: cannot write in directory {existing!r} "
                              f"({err.strerror or err})") from None
-    for flag, path in (("--json", json_path), ("--urdf-out", urdf_path)):
+    for flag, path in files:
         if path is not None and os.path.isdir(path):
             raise ValueError(f"{flag} {path!r} is a directory; expected a file path")
 
@@ -230,7 +232,8 @@ INPUT_FLAGS = {"data": "--data", "validate": "--validate", "loaded": "--loaded"}
 def check_files(args: argparse.Namespace) -> None:
     """Fail at once, before JAX or the library is imported, when a file a flag names
     (:data:`INPUT_FLAGS`, a ``--robot`` URDF or MJCF, a ``--drive-gains`` JSON file) cannot be
-    read or an output (``--out``, ``--json``, ``--urdf-out``) cannot be written."""
+    read or an output (``--out``, ``--json``, ``--urdf-out``, ``--mjcf-out``) cannot be
+    written."""
     for dest, flag in INPUT_FLAGS.items():
         paths = getattr(args, dest, None)
         for path in [paths] if isinstance(paths, str) else paths or ():
@@ -246,7 +249,7 @@ def check_files(args: argparse.Namespace) -> None:
         _readable("--drive-gains", gains, "JSON file ('identify-gains --json' writes it)")
     json_path = getattr(args, "json", None)
     check_writable(getattr(args, "out", None), None if json_path == "-" else json_path,
-                   getattr(args, "urdf_out", None))
+                   getattr(args, "urdf_out", None), getattr(args, "mjcf_out", None))
 
 
 def _readable(flag: str, path: str, expected: str) -> None:
