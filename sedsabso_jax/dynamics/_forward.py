@@ -161,17 +161,20 @@ def _fd_jit(robot, params, armature, extra, q, qd, tau):
 
 
 def _rk4(f, q, qd, tau, h):
-    """Classic fourth-order Runge-Kutta on ``(q, qd)``, as MuJoCo's ``RK4``."""
+    """Classic fourth-order Runge-Kutta on ``(q, qd)``, as MuJoCo's ``RK4``; stages 2-4
+    under one ``lax.scan`` (one copy of the dynamics to compile, not four)."""
     a1 = f(q, qd, tau)
-    v2 = qd + 0.5 * h * a1
-    a2 = f(q + 0.5 * h * qd, v2, tau)
-    v3 = qd + 0.5 * h * a2
-    a3 = f(q + 0.5 * h * v2, v3, tau)
-    v4 = qd + h * a3
-    a4 = f(q + h * v3, v4, tau)
-    q = q + h / 6.0 * (qd + 2.0 * v2 + 2.0 * v3 + v4)
-    qd = qd + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-    return q, qd
+
+    def stage(carry, c):
+        v, a, sum_v, sum_a = carry  # the previous stage's velocity and acceleration
+        v_next = qd + c * h * a
+        a_next = f(q + c * h * v, v_next, tau)
+        w = jnp.where(c == 1.0, 1.0, 2.0)
+        return (v_next, a_next, sum_v + w * v_next, sum_a + w * a_next), None
+
+    (_, _, sum_v, sum_a), _ = jax.lax.scan(stage, (qd, a1, qd, a1),
+                                           jnp.array([0.5, 0.5, 1.0], q.dtype))
+    return q + h / 6.0 * sum_v, qd + h / 6.0 * sum_a
 
 
 def _euler(f, q, qd, tau, h):
@@ -188,7 +191,7 @@ def _rollout(robot, params, armature, extra, q0, qd0, tau, dt, integrator, subst
 
     def f(q, qd, tau):
         return _map(one, [q, qd, tau])
-    h = dt / substeps
+    h = dt / substeps  # substeps traced: one compilation serves every count
 
     def advance(state, tau_k):
         state = jax.lax.fori_loop(0, substeps, lambda _, s: step(f, *s, tau_k, h), state)
@@ -218,7 +221,8 @@ def rollout(robot: Robot, params: Float[ArrayLike, " p"] | None,
     Accelerations from :func:`forward_dynamics` (``params``, ``armature``, ``extra`` as
     there; the parameters' Coulomb friction as given, see the module's note). All leading
     axes (windows) are simulated at once in one ``lax.scan`` over steps, compiled once per
-    robot structure, shapes, integrator, substeps and ``extra``."""
+    robot structure, shapes, integrator and ``extra`` (a new lambda each call compiles
+    again: pass the same function)."""
     if integrator not in INTEGRATORS:
         raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
     if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
@@ -241,7 +245,7 @@ def rollout(robot: Robot, params: Float[ArrayLike, " p"] | None,
     q0, qd0 = (jnp.broadcast_to(a, batch + (n,)).reshape(-1, n) for a in (q0, qd0))
     tau = jnp.broadcast_to(tau, batch + (steps, n)).reshape(-1, steps, n)
     q, qd = _rollout(robot, params, armature, extra, q0, qd0, tau,
-                     jnp.asarray(dt, jnp.float64), integrator, int(substeps))
+                     jnp.asarray(dt, jnp.float64), integrator, jnp.asarray(substeps))
     return q.reshape(batch + q.shape[1:]), qd.reshape(batch + qd.shape[1:])
 
 
