@@ -8,6 +8,11 @@ are ``sedsabso_jax``'s; the built-in robots are :mod:`sedsabso_jax.robots`."""
 from __future__ import annotations
 
 from ._base_parameters import random_states as random_states
+from ._forward import end_errors as end_errors
+from ._forward import forward_dynamics as forward_dynamics
+from ._forward import mass_matrix as mass_matrix
+from ._forward import rollout as rollout
+from ._forward import windows as windows
 from ._inertia import from_pseudo_inertia as from_pseudo_inertia
 from ._inertia import params_from_com as params_from_com
 from ._inertia import pseudo_inertia as pseudo_inertia
@@ -29,4 +34,5 @@ __all__ = [
     "pseudo_inertia", "from_pseudo_inertia", "params_from_com", "to_urdf", "update_urdf",
     "link_poses", "fixed_link_pose",
     "LINK_PARAMETERS", "N_LINK_PARAMETERS",
+    "mass_matrix", "forward_dynamics", "rollout", "windows", "end_errors",
 ]
