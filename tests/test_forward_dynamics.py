@@ -44,6 +44,8 @@ def mujoco_rollout(m, q0, qd0, tau, integrator):
     m.opt.timestep = DT
     if integrator == "rk4":
         m.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
+    elif integrator == "implicit":  # velocity derivatives implicit, Coriolis' too
+        m.opt.integrator = mujoco.mjtIntegrator.mjINT_IMPLICIT
     else:
         m.opt.integrator = mujoco.mjtIntegrator.mjINT_EULER
         m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_EULERDAMP
@@ -108,7 +110,7 @@ def chain(tmp_path_factory):
     return robot, m, armature, q0, qd0, tau
 
 
-@pytest.mark.parametrize("integrator", ["rk4", "euler"])
+@pytest.mark.parametrize("integrator", ["rk4", "euler", "implicit"])
 def test_rollout_equals_mujoco(chain, integrator):
     robot, m, armature, q0, qd0, tau = chain
     q, qd = rollout(robot, None, q0, qd0, tau, DT, armature=armature, integrator=integrator)

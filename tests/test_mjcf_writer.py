@@ -144,13 +144,41 @@ def test_identify_mjcf_out(tmp_path, capsys):
             "--json", str(js)]
     assert cli.main(argv) == 0
     text = capsys.readouterr().out
-    assert "the written MJCF in MuJoCo" in text and "left out (MuJoCo has no parameter " \
+    assert "written as MJCF for MuJoCo" in text and "left out (MuJoCo has no parameter " \
         "for it): nothing" in text
     model = mujoco.MjModel.from_xml_path(str(out))
     assert model.nu == 7 and model.opt.timestep == pytest.approx(1 / m.rate)
     row, = json.loads(js.read_text())["mujoco"]["rows"]
     assert row["mujoco"] == pytest.approx(row["own"], rel=0.01)
+    assert len(row["rollouts_own"]) == len(row["rollouts_mujoco"]) == 2
     out.unlink()
     assert cli.main([*argv, "--no-physical"]) == 2
     assert "--mjcf-out needs physically consistent" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_rollouts_of_an_exact_fit_follow_the_recording(rng):
+    """A recording simulated from a known chain (RK4, torques held over each 5 ms
+    sample, a sensor offset added), identified exactly: the fit's open-loop rollouts, in
+    JAX and in MuJoCo on its MJCF, follow the recording (the integrators' error only)."""
+    from sedsabso_jax.dynamics import forward_dynamics, rollout
+    from sedsabso_jax.identification._fit._rollouts import rollout_errors
+
+    robot = _robot(rng, n=3, friction=False)
+    dt, T = 0.005, 600
+    t = np.arange(T) * dt
+    tau = np.stack([np.sin(2 * np.pi * f * t + p) for f, p in
+                    zip((0.7, 1.1, 1.6), rng.uniform(0, 6, 3))], -1) * [20.0, 10.0, 5.0]
+    gravity = np.asarray(sj.inverse_dynamics(robot, robot.params, np.zeros((1, 3)),
+                                             np.zeros((1, 3)), np.zeros((1, 3))))[0]
+    tau = tau + gravity  # about the hanging pose
+    q, qd = (np.asarray(a) for a in rollout(robot, None, np.zeros(3), np.zeros(3),
+                                             tau[:-1], dt, substeps=8))
+    qdd = np.asarray(forward_dynamics(robot, None, q, qd, tau))
+    offset = np.array([0.4, -0.3, 0.2])
+    data = sj.Measurements(t, q, qd, qdd, tau + offset)
+    fit = sj.identify(robot, data, sj.PhysicallyConsistent(sj.OLS()),
+                      sj.TorqueModel.of(robot, (sj.Offset(),)))
+    errors = rollout_errors(fit, data, fit.mjcf(timestep=dt, integrator="RK4"))
+    own, theirs = errors.medians()["own"], errors.medians()["mujoco"]
+    assert max(own) < 0.1 and max(theirs) < 0.1, (own, theirs)

@@ -556,6 +556,15 @@ BUGS = [
     ("identification/_model/_offset.py", "Held(offset=np.asarray(values, float)",
      "Held(offset=-np.asarray(values, float)", "the torque offset's sign in the "
      "actuators' bias", ["tests/test_mjcf_writer.py"], None),
+    ("dynamics/_forward.py", "cho_factor(M + jnp.diag(armature), lower=True)",
+     "cho_factor(M, lower=True)", "the armature left out of forward dynamics",
+     ["tests/test_forward_dynamics.py"], None),
+    ("dynamics/_forward.py", "jnp.swapaxes(tau, 0, 1))",
+     "jnp.roll(jnp.swapaxes(tau, 0, 1), 1, 0))", "a rollout holds each torque one step "
+     "late", ["tests/test_forward_dynamics.py"], None),
+    ("dynamics/_forward.py", "jnp.asarray(tau[idx[:, :-1]])",
+     "jnp.asarray(tau[idx[:, 1:]])", "a window's torques taken one sample late",
+     ["tests/test_forward_dynamics.py"], None),
 ]
 
 

@@ -38,7 +38,7 @@ from ._robot import Robot, joint_arrays
 #: ``extra(q, qd) -> torques (..., n)`` the model adds to the inverse dynamics.
 Extra = Callable[[Array, Array], Array]
 #: The integrators :func:`rollout` knows.
-INTEGRATORS = ("rk4", "euler")
+INTEGRATORS = ("rk4", "euler", "implicit")
 
 
 def _params(robot: Robot, params) -> Array:
@@ -175,14 +175,37 @@ def _euler(f, q, qd, tau, h):
     return q + h * qd, qd
 
 
+def _implicit_qdd(robot, params, armature, extra, h, q, qd, tau) -> Array:
+    """The accelerations of one linearly implicit Euler step of one sample: the torques'
+    velocity derivative ``D`` taken implicitly, ``(M + diag(armature) + h D) qdd = tau -
+    h(q, qd) - extra(q, qd)`` (MuJoCo's ``implicit`` integrator; stable under stiff
+    friction such as a smooth Coulomb law near rest)."""
+    def torque(v, a):
+        out = _id(robot, params, q, v, a)
+        return out if extra is None else out + extra(q, v)
+
+    a0 = jnp.zeros_like(q)
+    M = jax.jacfwd(torque, argnums=1)(qd, a0)
+    D, b = jax.jacfwd(lambda v: (torque(v, a0),) * 2, has_aux=True)(qd)
+    return jnp.linalg.solve(M + jnp.diag(armature) + h * D, tau - b)
+
+
+def _implicit(f, q, qd, tau, h):
+    """Linearly implicit Euler: ``qd += h qdd`` (velocity derivatives implicit), then
+    ``q += h qd``."""
+    qd = qd + h * f(q, qd, tau)
+    return q + h * qd, qd
+
+
 @eqx.filter_jit
 def _rollout(robot, params, armature, extra, q0, qd0, tau, dt, integrator, substeps):
-    step = {"rk4": _rk4, "euler": _euler}[integrator]
-    one = partial(_qdd, robot, params, armature, extra)
+    step = {"rk4": _rk4, "euler": _euler, "implicit": _implicit}[integrator]
+    h = dt / substeps  # substeps traced: one compilation serves every count
+    one = (partial(_implicit_qdd, robot, params, armature, extra, h)
+           if integrator == "implicit" else partial(_qdd, robot, params, armature, extra))
 
     def f(q, qd, tau):
         return _map(one, [q, qd, tau])
-    h = dt / substeps  # substeps traced: one compilation serves every count
 
     def advance(state, tau_k):
         state = jax.lax.fori_loop(0, substeps, lambda _, s: step(f, *s, tau_k, h), state)
@@ -207,8 +230,10 @@ def rollout(robot: Robot, params: Float[ArrayLike, " p"] | None,
     as MuJoCo's controls and ``qfrc_applied``); the step is split into ``substeps`` equal
     integrator steps. Returns ``(q, qd)`` of shape ``(..., steps + 1, n)``, index 0 the
     initial state and index ``k`` the state at time ``k dt``. ``integrator``: ``"rk4"``
-    (classic Runge-Kutta, MuJoCo's ``integrator="RK4"``) or ``"euler"`` (semi-implicit:
-    ``qd += dt qdd; q += dt qd``, MuJoCo's ``Euler`` with ``<flag eulerdamp="disable"/>``).
+    (classic Runge-Kutta, MuJoCo's ``integrator="RK4"``), ``"euler"`` (semi-implicit:
+    ``qd += dt qdd; q += dt qd``, MuJoCo's ``Euler`` with ``<flag eulerdamp="disable"/>``)
+    or ``"implicit"`` (the same with every velocity derivative of the torques taken
+    implicitly, as MuJoCo's ``implicit``: for stiff friction laws).
     Accelerations from :func:`forward_dynamics` (``params``, ``armature``, ``extra`` as
     there; the parameters' Coulomb friction as given, see the module's note). All leading
     axes (windows) are simulated at once in one ``lax.scan`` over steps, compiled once per

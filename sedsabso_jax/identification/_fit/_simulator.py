@@ -88,20 +88,25 @@ def import_mujoco():
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class SimulatorCheck:
-    """A written MJCF judged in MuJoCo: for each data set (``rows``: name, the package's
-    own error, MuJoCo's inverse dynamics' error, in ``measure``), what was left out
-    (``left_out``)."""
+    """A written MJCF judged in MuJoCo beside the package's own model, on each data set
+    (``rows``, one dict each: ``data``, the torque error ``own`` and ``mujoco`` (MuJoCo's
+    inverse dynamics) in ``measure``, and the median end errors of open-loop rollouts,
+    ``rollouts_own`` and ``rollouts_mujoco``, one per length of ``lengths`` s, in
+    degrees), and what was left out (``left_out``)."""
 
     measure: str
-    rows: tuple[tuple[str, float, float], ...]
+    lengths: tuple[float, ...]
+    rows: tuple[dict, ...]
     left_out: tuple[str, ...]
 
     @classmethod
     def of(cls, ident, xml: str, recordings: dict, limits=None) -> SimulatorCheck:
-        """``ident``'s MJCF ``xml`` against its own prediction on each recording
-        (``{name: Measurements}``, new motions: their offsets' mean), by the NRMS over
-        the torque limits (or the relative RMS error without limits)."""
+        """``ident``'s MJCF ``xml`` against its own model on each recording (``{name:
+        Measurements}``; new motions: their offsets' mean): the torques by the NRMS over
+        the torque limits (or the relative RMS error without limits), and rollouts
+        (:func:`~._rollouts.rollout_errors`)."""
         from .._metrics import validation_metrics
+        from ._rollouts import LENGTHS, rollout_errors
 
         measure = ("nrms_limits_percent" if limits is not None
                    else "relative_rms_percent_overall")
@@ -109,25 +114,44 @@ class SimulatorCheck:
         for name, d in recordings.items():
             own = ident.predict(d.q, d.qd, d.qdd)
             written = mujoco_torques(xml, d.q, d.qd, d.qdd)
-            rows.append((name, float(validation_metrics(d.tau, own, limits)[measure]),
-                         float(validation_metrics(d.tau, written, limits)[measure])))
-        return cls(measure, tuple(rows), simulated(ident.model, ident.values).left_out)
+            medians = rollout_errors(ident, d, xml, LENGTHS).medians()
+            rows.append({"data": name,
+                         "own": float(validation_metrics(d.tau, own, limits)[measure]),
+                         "mujoco": float(validation_metrics(d.tau, written, limits)[measure]),
+                         "rollouts_own": medians["own"],
+                         "rollouts_mujoco": medians["mujoco"]})
+        return cls(measure, LENGTHS, tuple(rows),
+                   simulated(ident.model, ident.values).left_out)
 
     def lines(self) -> list[str]:
         """The report's section."""
-        from ..._output import markdown_table
+        from ..._output import columns_note, markdown_table
 
-        table = markdown_table(["data", "own [%]", "MuJoCo [%]", "MuJoCo / own"],
-                               [[n, f"{a:.4f}", f"{b:.4f}", f"{b / a:.3f}"]
-                                for n, a, b in self.rows])
-        return ["", f"the written MJCF in MuJoCo (`mj_inverse`), error `{self.measure}` "
-                    "against the package's own prediction:", "", table, "",
-                "left out (MuJoCo has no parameter for it): "
+        lengths = [f"{x:g} s" for x in self.lengths]
+        table = markdown_table(
+            ["data", "own [%]", "MuJoCo [%]", "MuJoCo / own",
+             *(f"rollout {x} own [deg]" for x in lengths),
+             *(f"rollout {x} MuJoCo [deg]" for x in lengths)],
+            [[r["data"], f"{r['own']:.4f}", f"{r['mujoco']:.4f}",
+              f"{r['mujoco'] / r['own']:.3f}", *(f"{e:.3g}" for e in r["rollouts_own"]),
+              *(f"{e:.3g}" for e in r["rollouts_mujoco"])] for r in self.rows])
+        return ["", "the identified model simulated, and written as MJCF for MuJoCo:", "",
+                table, "", columns_note(
+                    ("own [%]", f"the package's model's torque error (`{self.measure}`)"),
+                    ("MuJoCo [%]", "the written MJCF's, from MuJoCo's inverse dynamics "
+                     "(`mj_inverse`)"),
+                    ([*(f"rollout {x} own [deg]" for x in lengths),
+                      *(f"rollout {x} MuJoCo [deg]" for x in lengths)], "open-loop rollouts from measured states driven by the "
+                     "measured torques: the median over windows and joints of the position "
+                     "error after that time (own: the package's model in JAX, linearly "
+                     "implicit Euler in steps of at most 1 ms; MuJoCo: the MJCF, its "
+                     "integrator; `inf`: most windows diverged)")),
+                "", "left out (MuJoCo has no parameter for it): "
                 + ("; ".join(self.left_out) if self.left_out else "nothing")]
 
     def as_dict(self) -> dict:
-        return {"measure": self.measure, "left_out": list(self.left_out),
-                "rows": [{"data": n, "own": a, "mujoco": b} for n, a, b in self.rows]}
+        return {"measure": self.measure, "rollout_lengths_s": list(self.lengths),
+                "left_out": list(self.left_out), "rows": list(self.rows)}
 
 
 def held_frictions(frictions):

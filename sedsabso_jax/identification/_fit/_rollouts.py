@@ -1,0 +1,148 @@
+"""An identification simulated: open-loop rollouts from measured states, driven by the
+measured torques, in JAX (:func:`~sedsabso_jax.dynamics.rollout`) and in MuJoCo (the
+written MJCF), and their end errors after a few tenths of a second."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array
+
+from ...dynamics._forward import rollout
+from ...dynamics._robot import Robot
+from ._simulator import import_mujoco, simulated
+
+#: The rollout windows' lengths the report gives (s).
+LENGTHS = (0.2, 0.5)
+#: Windows per recording, evenly spaced over it.
+WINDOWS = 64
+#: The longest integrator step of the JAX rollouts (s): a sample period is split into
+#: as many substeps as that needs (linearly implicit Euler is first order).
+LONGEST_STEP = 0.001
+
+
+class ModelTorque(eqx.Module):
+    """The torques an identified model adds to its rigid body as a function of the state:
+    its Coulomb friction ``fc`` in the model's own shape (a smooth Coulomb's ``tanh``, else
+    ``sign``) and its torque offsets (``extra`` of :func:`~sedsabso_jax.dynamics.rollout`)."""
+
+    fc: Array
+    offset: Array
+    model: Any  # the TorqueModel (its Coulomb shape)
+
+    def __call__(self, q: Array, qd: Array) -> Array:
+        shape, _ = self.model.coulomb(qd, jnp)
+        return self.fc * shape + self.offset
+
+
+def simulated_dynamics(ident) -> tuple[Robot, np.ndarray, np.ndarray, ModelTorque]:
+    """``(robot, params, armature, extra)`` of a physical fit for
+    :func:`~sedsabso_jax.dynamics.rollout`: the links and viscous friction (Coulomb's
+    moved to ``extra``, in the model's shape), the armature and offsets of its terms
+    (:func:`~._simulator.simulated`; what no simulator holds is left out here too)."""
+    if ident.full_params is None:
+        raise ValueError("a rollout needs the full link parameters of a physically "
+                         "consistent fit: identify with PhysicallyConsistent(...) "
+                         "(--physical)")
+    p = np.asarray(ident.full_params, dtype=float).reshape(-1, 12).copy()
+    fc = p[:, 10].copy()
+    p[:, 10] = 0.0
+    held = simulated(ident.model, ident.values)
+    return (ident.model.robot, p.ravel(), held.armature,
+            ModelTorque(jnp.asarray(fc), jnp.asarray(held.offset), ident.model))
+
+
+def starts(samples: int, steps: int, count: int = WINDOWS) -> np.ndarray:
+    """``count`` window starts evenly spaced over a recording of ``samples`` (fewer where
+    it is short), each followed by ``steps`` samples."""
+    last = samples - steps - 1
+    if last < 0:
+        raise ValueError(f"a recording of {samples} samples is shorter than one rollout "
+                         f"window ({steps} steps)")
+    return np.unique(np.linspace(0, last, min(count, last + 1)).round().astype(int))
+
+
+def mujoco_rollouts(xml: str, q0: np.ndarray, qd0: np.ndarray, tau: np.ndarray
+                    ) -> np.ndarray:
+    """MuJoCo's own rollouts of the MJCF ``xml`` (its integrator and timestep) from each
+    window's ``(q0, qd0)`` (``(w, n)``), ``ctrl`` the measured torques ``tau`` (``(w, steps,
+    n)``) held over each step: positions ``(w, steps + 1, n)``, ``inf`` from where MuJoCo
+    found the simulation unstable (it then resets the state; its warning is not printed)."""
+    mujoco = import_mujoco()
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    w, steps, n = tau.shape
+    out = np.empty((w, steps + 1, n))
+    bad = [mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL,
+           mujoco.mjtWarning.mjWARN_BADQPOS]
+    printed = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda text: None)
+    try:
+        for k in range(w):
+            mujoco.mj_resetData(m, d)
+            d.qpos[:], d.qvel[:] = q0[k], qd0[k]
+            out[k, 0] = d.qpos
+            for i in range(steps):
+                d.ctrl[:] = tau[k, i]
+                mujoco.mj_step(m, d)
+                if any(d.warning[b].number for b in bad):
+                    out[k, i + 1:] = np.inf
+                    break
+                out[k, i + 1] = d.qpos
+    finally:
+        mujoco.set_mju_user_warning(printed)
+    return out
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class RolloutErrors:
+    """End errors of open-loop rollouts: ``own`` (the package's model in JAX) and
+    ``mujoco`` (the written MJCF in MuJoCo, or None), each ``(len(lengths), windows, n)``
+    in degrees (metres for a prismatic joint) after each of ``lengths`` seconds."""
+
+    lengths: tuple[float, ...]
+    own: np.ndarray
+    mujoco: np.ndarray | None
+
+    def medians(self) -> dict[str, list[float | None]]:
+        """The median end error over windows and joints, per length."""
+        def median(e):
+            return None if e is None else [float(np.median(x)) for x in e]
+        return {"own": median(self.own), "mujoco": median(self.mujoco)}
+
+
+def rollout_errors(ident, data, xml: str | None = None, lengths=LENGTHS,
+                   count: int = WINDOWS) -> RolloutErrors:
+    """Open-loop rollouts of a physical fit ``ident`` from ``count`` measured states of
+    ``data`` (a :class:`~sedsabso_jax.Measurements`), driven by its measured torques held
+    over each sample period, for the longest of ``lengths`` (s); each length's error is
+    the rollout's at that time: in JAX (linearly implicit Euler, steps of at most
+    :data:`LONGEST_STEP`), and
+    in MuJoCo when the MJCF ``xml`` is given (its own integrator; its timestep must be the
+    sample period)."""
+    dt = 1.0 / float(data.rate)
+    steps = [int(round(length / dt)) for length in lengths]
+    if min(steps) < 1:
+        raise ValueError(f"rollout lengths {lengths} s are shorter than a sample ({dt} s)")
+    first = starts(data.n_samples, max(steps), count)
+    index = first[:, None] + np.arange(max(steps) + 1)
+    q, qd, tau = (np.asarray(a, dtype=float) for a in (data.q, data.qd, data.tau))
+    robot, params, armature, extra = simulated_dynamics(ident)
+    own, _ = rollout(robot, params, q[first], qd[first], tau[index[:, :-1]], dt,
+                     armature=armature, extra=extra, integrator="implicit",
+                     substeps=max(1, int(np.ceil(dt / LONGEST_STEP - 1e-9))))
+    measured = q[index]
+    scale = np.array([180.0 / np.pi if t == "revolute" else 1.0 for t in robot.joint_types])
+
+    def errors(sim):  # a diverged window's error is inf
+        e = np.stack([np.abs(np.asarray(sim)[:, k] - measured[:, k]) * scale for k in steps])
+        return np.where(np.isfinite(e), e, np.inf)
+
+    theirs = None
+    if xml is not None:
+        theirs = errors(mujoco_rollouts(xml, q[first], qd[first], tau[index[:, :-1]]))
+    return RolloutErrors(tuple(float(x) for x in lengths), errors(own), theirs)
