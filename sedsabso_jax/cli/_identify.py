@@ -145,7 +145,7 @@ def run(args: argparse.Namespace) -> None:
     models = candidate_models(robot, frictions, transmission=transmission,
                               recordings=len(data) if args.offset_per_recording else 1)
     # every fit, the evaluation, the files
-    figures = 0 if args.out is None else 1 + len(validate)
+    figures = 0 if args.out is None else (1 + len(validate)) * (1 + (args.mjcf_out is not None))
     with LineProgress("identify", then=writing_seconds(figures)) as progress:
         report = chosen_and_identified(robot, data, choice, models, estimators,
                                        held=dict(named_recordings(robot, held_out)),

@@ -24,6 +24,7 @@ from ..._output import (
 from ...measurements._container import Measurements
 from .._estimators._estimator import Limits
 from .._fit._identify import Identification
+from .._fit._rollouts import figure_rollouts
 from .._fit._simulator import SimulatorCheck
 from .._fit._uncertainty import relative_std_percent
 from .._metrics import (
@@ -309,7 +310,8 @@ class IdentificationReport:
     def figures(self) -> dict:
         """``{file name: figure}``: measured against predicted torques per data set
         (``torques_validation.png`` for one held-out recording, ``torques_validation_K.png``
-        for the K-th of several)."""
+        for the K-th of several), and with :attr:`simulator` their rollouts
+        (``rollouts_fit.png``, ...)."""
         ident, robot = self.ident, self.ident.model.robot
         sets: list[tuple[str, Measurements, np.ndarray | None, str]] = [
             ("torques_fit.png", self.data, self.predicted[0], "identification data")]
@@ -319,9 +321,14 @@ class IdentificationReport:
                  for k, h in enumerate(self.validations, 1)]
         method = ident.method + (", physically consistent" if ident.full_params is not None
                                  else "")
-        return {name: figure_torques(d.times, d.tau, pred,  # type: ignore[arg-type]
-                                     robot.joint_names, f"{robot.name}, {method}: {label}")
-                for name, d, pred, label in sets}
+        figures = {name: figure_torques(d.times, d.tau, pred,  # type: ignore[arg-type]
+                                        robot.joint_names, f"{robot.name}, {method}: {label}")
+                   for name, d, pred, label in sets}
+        if self.simulator is not None:  # the rollouts, named as the torque figures
+            for (name, _, _, label), r in zip(sets, self.simulator.rollouts.values()):
+                figures[name.replace("torques", "rollouts")] = figure_rollouts(
+                    r, robot, f"{robot.name}: open-loop rollouts, {label}")
+        return figures
 
     def write(self, settings: dict, out_dir: PathLike | None = None,
               json_path: PathLike | None = None, urdf_path: PathLike | None = None,

@@ -102,11 +102,18 @@ def mujoco_rollouts(xml: str, q0: np.ndarray, qd0: np.ndarray, tau: np.ndarray
 class RolloutErrors:
     """End errors of open-loop rollouts: ``own`` (the package's model in JAX) and
     ``mujoco`` (the written MJCF in MuJoCo, or None), each ``(len(lengths), windows, n)``
-    in degrees (metres for a prismatic joint) after each of ``lengths`` seconds."""
+    in degrees (metres for a prismatic joint) after each of ``lengths`` seconds; the
+    windows' ``times`` ``(w, steps + 1)`` (s from the recording's start), the
+    ``measured`` positions there and the simulated ones, ``q_own`` and ``q_mujoco``
+    (None without MuJoCo), each ``(w, steps + 1, n)``."""
 
     lengths: tuple[float, ...]
     own: np.ndarray
     mujoco: np.ndarray | None
+    times: np.ndarray
+    measured: np.ndarray
+    q_own: np.ndarray
+    q_mujoco: np.ndarray | None
 
     def medians(self) -> dict[str, list[float | None]]:
         """The median end error over windows and joints, per length."""
@@ -142,7 +149,40 @@ def rollout_errors(ident, data, xml: str | None = None, lengths=LENGTHS,
         e = np.stack([np.abs(np.asarray(sim)[:, k] - measured[:, k]) * scale for k in steps])
         return np.where(np.isfinite(e), e, np.inf)
 
-    theirs = None
-    if xml is not None:
-        theirs = errors(mujoco_rollouts(xml, q[first], qd[first], tau[index[:, :-1]]))
-    return RolloutErrors(tuple(float(x) for x in lengths), errors(own), theirs)
+    q_mujoco = None if xml is None else mujoco_rollouts(xml, q[first], qd[first],
+                                                        tau[index[:, :-1]])
+    times = (np.asarray(data.times, dtype=float) - float(data.times[0]))[index]
+    return RolloutErrors(tuple(float(x) for x in lengths), errors(own),
+                         None if q_mujoco is None else errors(q_mujoco), times, measured,
+                         np.asarray(own), q_mujoco)
+
+
+def figure_rollouts(r: RolloutErrors, robot: Robot, title: str, windows: int = 6):
+    """The first ``windows`` rollout windows against the measured positions, one panel a
+    joint (degrees for a revolute joint)."""
+    from ..._output import pyplot
+
+    plt = pyplot()
+    n = robot.n_joints
+    scale = np.array([180.0 / np.pi if t == "revolute" else 1.0 for t in robot.joint_types])
+    fig, axes = plt.subplots(n, 1, figsize=(8, 1.5 * n + 0.8), sharex=True,
+                             constrained_layout=True, squeeze=False)
+    for j, ax in enumerate(axes[:, 0]):
+        for k in range(min(windows, len(r.times))):
+            first = k == 0
+            ax.plot(r.times[k], r.measured[k, :, j] * scale[j], color="0.3", lw=1.2,
+                    label="measured" if first else None)
+            ax.plot(r.times[k], r.q_own[k, :, j] * scale[j], color="tab:red", lw=1,
+                    ls="--", label="the package's model (JAX)" if first else None)
+            if r.q_mujoco is not None:
+                ax.plot(r.times[k], np.where(np.isfinite(r.q_mujoco[k, :, j]),
+                                             r.q_mujoco[k, :, j], np.nan) * scale[j],
+                        color="tab:blue", lw=1, ls=":",
+                        label="written MJCF (MuJoCo)" if first else None)
+        unit = "deg" if robot.joint_types[j] == "revolute" else "m"
+        ax.set_ylabel(f"{robot.joint_names[j]}\n[{unit}]")
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(loc="best", fontsize="small")
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle(title)
+    return fig

@@ -98,6 +98,8 @@ class SimulatorCheck:
     lengths: tuple[float, ...]
     rows: tuple[dict, ...]
     left_out: tuple[str, ...]
+    #: each data set's :class:`~._rollouts.RolloutErrors` (its figure), by name
+    rollouts: dict = dataclasses.field(default_factory=dict)
 
     @classmethod
     def of(cls, ident, xml: str, recordings: dict, limits=None) -> SimulatorCheck:
@@ -110,18 +112,19 @@ class SimulatorCheck:
 
         measure = ("nrms_limits_percent" if limits is not None
                    else "relative_rms_percent_overall")
-        rows = []
+        rows, rollouts = [], {}
         for name, d in recordings.items():
             own = ident.predict(d.q, d.qd, d.qdd)
             written = mujoco_torques(xml, d.q, d.qd, d.qdd)
-            medians = rollout_errors(ident, d, xml, LENGTHS).medians()
+            rollouts[name] = rollout_errors(ident, d, xml, LENGTHS)
+            medians = rollouts[name].medians()
             rows.append({"data": name,
                          "own": float(validation_metrics(d.tau, own, limits)[measure]),
                          "mujoco": float(validation_metrics(d.tau, written, limits)[measure]),
                          "rollouts_own": medians["own"],
                          "rollouts_mujoco": medians["mujoco"]})
         return cls(measure, LENGTHS, tuple(rows),
-                   simulated(ident.model, ident.values).left_out)
+                   simulated(ident.model, ident.values).left_out, rollouts)
 
     def lines(self) -> list[str]:
         """The report's section."""
