@@ -6,12 +6,10 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from conftest import random_urdf
 
 import sedsabso_jax as sj
-from sedsabso_jax.dynamics import (end_errors, forward_dynamics, mass_matrix, rollout,
-                                   windows)
-
-from conftest import random_urdf
+from sedsabso_jax.dynamics import end_errors, forward_dynamics, mass_matrix, rollout, windows
 
 mujoco = pytest.importorskip("mujoco")
 

@@ -140,8 +140,8 @@ def test_identify_mjcf_out(tmp_path, capsys):
     data = m.save(tmp_path / "m.npz")
     out, js = tmp_path / "out" / "kuka.xml", tmp_path / "r.json"
     argv = ["identify", "--robot", "kuka_lwr4", "--data", str(data), "--method", "OLS",
-            "--weights", "equal", "--friction", "viscous-coulomb+offset", "--folds", "0", "--mjcf-out", str(out),
-            "--json", str(js)]
+            "--weights", "equal", "--friction", "viscous-coulomb+offset", "--folds", "0",
+            "--mjcf-out", str(out), "--json", str(js)]
     assert cli.main(argv) == 0
     text = capsys.readouterr().out
     assert "written as MJCF for MuJoCo" in text and "left out (MuJoCo has no parameter " \

@@ -553,8 +553,8 @@ BUGS = [
     ("dynamics/_mjcf_writer.py", "FRICTION_SOLIMP = (0.999, 0.999, 0.001)",
      "FRICTION_SOLIMP = (0.9, 0.95, 0.001)", "MuJoCo's default impedance for the dry "
      "friction: much of the Coulomb friction lost", ["tests/test_mjcf_writer.py"], None),
-    ("identification/_model/_offset.py", "Held(offset=np.asarray(values, float)",
-     "Held(offset=-np.asarray(values, float)", "the torque offset's sign in the "
+    ("identification/_model/_offset.py", "InSimulator(offset=np.asarray(values, float)",
+     "InSimulator(offset=-np.asarray(values, float)", "the torque offset's sign in the "
      "actuators' bias", ["tests/test_mjcf_writer.py"], None),
     ("dynamics/_forward.py", "cho_factor(M + jnp.diag(armature), lower=True)",
      "cho_factor(M, lower=True)", "the armature left out of forward dynamics",

@@ -10,19 +10,19 @@ import math
 import os
 from typing import Any
 
-from ._common import (
-    LineProgress,
-    add_run_options,
-    non_negative_int,
-    positive_int,
-    subcommand,
-)
 from ._checks import (
     check_signals,
     inputs_of,
     one_rate,
     refuse_contradictions,
     refuse_overwriting,
+)
+from ._common import (
+    LineProgress,
+    add_run_options,
+    non_negative_int,
+    positive_int,
+    subcommand,
 )
 from ._loading import (
     add_loading,

@@ -108,7 +108,8 @@ def _qdd(robot, params, armature, extra, q, qd, tau) -> Array:
 
 def mass_matrix(robot: Robot, params: Float[ArrayLike, " p"] | None,
                 q: Float[ArrayLike, "*batch n"], *,
-                armature: Float[ArrayLike, "n"] | float | None = None) -> Float[Array, "*batch n n"]:
+                armature: Float[ArrayLike, " n"] | float | None = None
+                ) -> Float[Array, "*batch n n"]:
     """The joint-space mass matrix ``M(q) + diag(armature)``, ``(..., n, n)``, float64.
 
     Exact: the Jacobian of :func:`~sedsabso_jax.inverse_dynamics` with respect to ``qdd``
@@ -129,7 +130,7 @@ def _mass_jit(robot, params, armature, q):
 def forward_dynamics(robot: Robot, params: Float[ArrayLike, " p"] | None,
                      q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
                      tau: Float[ArrayLike, "*batch n"], *,
-                     armature: Float[ArrayLike, "n"] | float | None = None,
+                     armature: Float[ArrayLike, " n"] | float | None = None,
                      extra: Extra | None = None) -> Float[Array, "*batch n"]:
     """Joint accelerations ``qdd`` solving
     ``(M(q) + diag(armature)) qdd + h(q, qd) = tau - extra(q, qd)`` (Featherstone 2008,
@@ -221,7 +222,7 @@ def _rollout(robot, params, armature, extra, q0, qd0, tau, dt, integrator, subst
 def rollout(robot: Robot, params: Float[ArrayLike, " p"] | None,
             q0: Float[ArrayLike, "*batch n"], qd0: Float[ArrayLike, "*batch n"],
             tau: Float[ArrayLike, "*batch steps n"], dt: float, *,
-            armature: Float[ArrayLike, "n"] | float | None = None,
+            armature: Float[ArrayLike, " n"] | float | None = None,
             extra: Extra | None = None, integrator: str = "rk4", substeps: int = 1
             ) -> tuple[Float[Array, "*batch steps+1 n"], Float[Array, "*batch steps+1 n"]]:
     """Open-loop simulation of the model from ``(q0, qd0)`` driven by ``tau``.
@@ -243,7 +244,8 @@ def rollout(robot: Robot, params: Float[ArrayLike, " p"] | None,
         raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
     if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
         raise ValueError(f"substeps must be a positive integer, got {substeps!r}")
-    if not np.isscalar(dt) or not dt > 0:
+    if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating, np.integer)) \
+            or not dt > 0:
         raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
     _x64.require("rollout")
     params, armature = _params(robot, params), _armature(robot, armature)

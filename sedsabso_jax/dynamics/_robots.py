@@ -15,8 +15,8 @@ from jaxtyping import ArrayLike, Bool, Float
 
 from ..paper import TABLE2
 from . import _spatial as sp
-from ._robot import N_LINK_PARAMETERS, STANDARD_GRAVITY, Robot
 from ._mjcf import from_mjcf
+from ._robot import N_LINK_PARAMETERS, STANDARD_GRAVITY, Robot
 from ._urdf import from_urdf
 
 __all__ = ["BUILTIN", "franka_panda", "from_dh", "from_mdh", "from_urdf", "kuka_lwr4",

@@ -18,7 +18,12 @@ value (``Default``, ``DEFAULT``) and the rules between ``select_and_identify``'s
 (``Choice``), the validation's parts and results,
 Dahl's presliding state (``dahl_state``), how far held-out data extrapolate
 (``extrapolation``), each held-out recording of a report judged alone (``HeldOut``) and
-metrics averaged over recordings (``mean_metrics``). Builds on :mod:`sedsabso_jax.dynamics`, :mod:`sedsabso_jax.optim`
+metrics averaged over recordings (``mean_metrics``), and the identified model in a
+simulator: what MuJoCo holds of each term and of a model (``InSimulator``,
+``Simulated``, ``simulated``; the candidates it holds in full, ``held_frictions``), its
+torques there (``mujoco_torques``), open-loop rollouts in JAX and in MuJoCo
+(``rollout_errors``, ``RolloutErrors``) and the report's check of both
+(``SimulatorCheck``). Builds on :mod:`sedsabso_jax.dynamics`, :mod:`sedsabso_jax.optim`
 and :mod:`sedsabso_jax.measurements`.
 
 The sub-packages answer one question each: ``_model`` (what torque a model predicts: its
@@ -38,6 +43,7 @@ from ._default._held_out import HeldOut as HeldOut
 from ._default._policy import DEFAULT as DEFAULT
 from ._default._policy import Default as Default
 from ._default._report import figure_torques as figure_torques
+from ._default._simulator_check import SimulatorCheck as SimulatorCheck
 from ._estimators._box_search import FACE_TOLERANCE as FACE_TOLERANCE
 from ._estimators._estimator import EstimatorFit as EstimatorFit
 from ._estimators._estimator import FitProblem as FitProblem
@@ -46,6 +52,12 @@ from ._estimators._least_squares import AbstractLeastSquares as AbstractLeastSqu
 from ._fit._fit import SETTLE_RTOL as SETTLE_RTOL
 from ._fit._fit import Fitted as Fitted
 from ._fit._projection import Projection as Projection
+from ._fit._rollouts import RolloutErrors as RolloutErrors
+from ._fit._rollouts import rollout_errors as rollout_errors
+from ._fit._simulator import Simulated as Simulated
+from ._fit._simulator import held_frictions as held_frictions
+from ._fit._simulator import mujoco_torques as mujoco_torques
+from ._fit._simulator import simulated as simulated
 from ._gains._result import CALIBRATED_STD as CALIBRATED_STD
 from ._gains._solvers import GAIN_METHODS as GAIN_METHODS
 from ._gains._solvers import AbstractGainMethod as AbstractGainMethod
@@ -64,6 +76,7 @@ from ._model._order import TERMS as TERMS
 from ._model._order import parse_friction as parse_friction
 from ._model._scales import AbstractScale as AbstractScale
 from ._model._term import AbstractTerm as AbstractTerm
+from ._model._term import InSimulator as InSimulator
 from ._model._term import Nonlinear as Nonlinear
 from ._model._term import Signals as Signals
 from ._model._term import diagonal as diagonal
@@ -103,4 +116,6 @@ __all__ = [
     "PopulationSearch", "LeastSquaresSearch", "dahl_state", "increments", "GAIN_METHODS",
     "AbstractGainMethod", "LikelihoodGains", "TotalGains", "OrdinaryGains", "PhysicalGains",
     "CALIBRATED_STD", "KeptTerms", "KEPT_TERMS", "rests", "Rests", "HeldOut", "mean_metrics",
+    "InSimulator", "Simulated", "simulated", "held_frictions", "mujoco_torques",
+    "SimulatorCheck", "rollout_errors", "RolloutErrors",
 ]

@@ -25,7 +25,6 @@ from ...measurements._container import Measurements
 from .._estimators._estimator import Limits
 from .._fit._identify import Identification
 from .._fit._rollouts import figure_rollouts
-from .._fit._simulator import SimulatorCheck
 from .._fit._uncertainty import relative_std_percent
 from .._metrics import (
     METRICS_NOTE,
@@ -48,6 +47,7 @@ from ._held_out import (
     judge,
     named_recordings,
 )
+from ._simulator_check import SimulatorCheck
 from ._stages import stage_lines
 
 if TYPE_CHECKING:
@@ -337,7 +337,8 @@ class IdentificationReport:
         """Write the figures and ``identification.json`` into ``out_dir`` (created if
         missing), the JSON also to ``json_path`` and the identified robot's URDF to
         ``urdf_path`` (``urdf_source`` updated, if given: :meth:`Identification.urdf`),
-        its MJCF (:meth:`with_mjcf`) to ``mjcf_path`` (their directories created); everything is rendered before the first file is
+        its MJCF (:meth:`with_mjcf`) to ``mjcf_path`` (their directories created);
+        everything is rendered before the first file is
         written. Returns the paths written."""
         document = self.document(settings)
         urdf = self.ident.urdf(urdf_source) if urdf_path is not None else None

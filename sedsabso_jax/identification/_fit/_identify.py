@@ -26,6 +26,7 @@ from ...dynamics._limits import JointLimits
 from ...dynamics._robot import Robot
 from ...dynamics._urdf_writer import to_urdf, update_urdf
 from ...optim._linear import factorize
+from .._data_checks import check_fit_data, pulled
 from .._estimators._estimator import (
     Estimator,
     EstimatorFit,
@@ -35,7 +36,6 @@ from .._estimators._estimator import (
     per_joint,
 )
 from .._estimators._least_squares import OLS
-from .._data_checks import check_fit_data, pulled
 from .._metrics import nrms_over_limits
 from .._model._checks import model_of, regrouped_message
 from .._model._torque_model import TorqueModel

@@ -8,7 +8,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ._term import AbstractTerm, Held, ModelView, Signals, through_motors
+from ._term import AbstractTerm, InSimulator, ModelView, Signals, through_motors
 
 
 class Armature(AbstractTerm):
@@ -29,13 +29,13 @@ class Armature(AbstractTerm):
 
     held_in_full: ClassVar[bool] = True
 
-    def held(self, model: ModelView, values: np.ndarray) -> Held:
+    def held(self, model: ModelView, values: np.ndarray) -> InSimulator:
         """The joint-side rotor inertia ``diag(K^T IA K)``; a transmission that couples
         joints also couples their accelerations, which a per-joint armature cannot hold."""
         K = np.asarray(model.motor_matrix, float)
         inertia = K.T @ np.diag(np.asarray(values, float)) @ K
         coupled = inertia - np.diag(np.diag(inertia))
-        return Held(armature=np.diag(inertia).copy(), lost=(
+        return InSimulator(armature=np.diag(inertia).copy(), lost=(
             f"the coupled rotor inertia off the diagonal (up to {np.abs(coupled).max():.3g} "
             f"kg m^2)" if np.any(coupled) else ""))
 

@@ -10,7 +10,7 @@ import equinox as eqx
 import numpy as np
 
 from ._scales import AbstractVelocityScale, as_scale
-from ._term import AbstractTerm, Held, ModelView, Signals, diagonal
+from ._term import AbstractTerm, InSimulator, ModelView, Signals, diagonal
 
 #: Velocity scale (rad/s or m/s) of :class:`SmoothCoulomb` unless told.
 SMOOTH_VELOCITY = 0.02
@@ -75,10 +75,10 @@ class SmoothCoulomb(AbstractVelocityScale):
     def coulomb(self, qd: Any, xp: ModuleType = np) -> Any:
         return xp.tanh(qd / self.per_joint(qd.shape[-1], xp))
 
-    def held(self, model: ModelView, values: np.ndarray) -> Held:
+    def held(self, model: ModelView, values: np.ndarray) -> InSimulator:
         """The Coulomb level is the simulator's (MuJoCo's ``frictionloss``); the shape near
         rest is its solver's, not ``tanh``."""
-        return Held(lost=f"the tanh(qd/v) shape of the Coulomb friction near rest (v = "
+        return InSimulator(lost=f"the tanh(qd/v) shape of the Coulomb friction near rest (v = "
                          f"{', '.join(f'{v:.3g}' for v in np.atleast_1d(self.velocity))})")
 
 

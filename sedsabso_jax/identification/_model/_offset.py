@@ -6,7 +6,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ._term import AbstractTerm, Held, ModelView, Signals
+from ._term import AbstractTerm, InSimulator, ModelView, Signals
 
 
 class Offset(AbstractTerm):
@@ -44,8 +44,8 @@ class Offset(AbstractTerm):
 
     held_in_full: ClassVar[bool] = True
 
-    def held(self, model: ModelView, values: np.ndarray) -> Held:
+    def held(self, model: ModelView, values: np.ndarray) -> InSimulator:
         """The actuators' bias: each joint's offset (with one per recording, their mean,
         as new motions get)."""
         n = model.robot.n_joints
-        return Held(offset=np.asarray(values, float).reshape(n, -1).mean(axis=1))
+        return InSimulator(offset=np.asarray(values, float).reshape(n, -1).mean(axis=1))

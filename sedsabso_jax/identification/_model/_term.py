@@ -112,7 +112,7 @@ class Signals:
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
-class Held:
+class InSimulator:
     """What a rigid-body simulator (MuJoCo) holds of a term, per joint (``(n,)`` each,
     None: nothing of that kind): the rotor inertia seen at the joint (``armature``), a
     torque the actuators subtract from the measured one (``offset``); ``lost``: what of
@@ -193,7 +193,7 @@ class AbstractTerm(eqx.Module):
         inside a compiled search, taken as they are)."""
         raise ValueError(f"term {self.name!r} has no parameters to search")
 
-    def held(self, model: ModelView, values: np.ndarray) -> Held | None:
+    def held(self, model: ModelView, values: np.ndarray) -> InSimulator | None:
         """What a rigid-body simulator holds of this term with its coefficients ``values``
         (one per name), or None where it holds none of it (the term is then left out of
         a simulator's model, :meth:`~.._fit._identify.Identification.mjcf`)."""

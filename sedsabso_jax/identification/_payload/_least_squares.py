@@ -36,8 +36,8 @@ from jaxtyping import Float
 from threadpoolctl import threadpool_limits
 
 from ...dynamics._inertia import from_pseudo_inertia, pseudo_inertia
-from .._estimators._estimator import Sigma, per_joint
 from .._estimators._conic import solve
+from .._estimators._estimator import Sigma, per_joint
 from .._estimators._physical import PSD_MARGIN, RIDGE
 from .._fit._uncertainty import NULL_COMPONENT, RANK_TOLERANCE
 

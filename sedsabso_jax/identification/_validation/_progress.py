@@ -6,6 +6,7 @@ work ends by the one counter of a call (:class:`Fits`)."""
 from __future__ import annotations
 
 from collections.abc import Callable, Collection, Sequence
+
 import numpy as np
 
 from .._estimators._estimator import Estimator, ProgressCallback
