@@ -182,3 +182,24 @@ def test_rollouts_of_an_exact_fit_follow_the_recording(rng):
     errors = rollout_errors(fit, data, fit.mjcf(timestep=dt, integrator="RK4"))
     own, theirs = errors.medians()["own"], errors.medians()["mujoco"]
     assert max(own) < 0.1 and max(theirs) < 0.1, (own, theirs)
+
+
+def test_friction_at_rest_is_held_as_dry_friction(rng):
+    """Friction at rest (Dahl's presliding) saturates at FP in steady sliding: the MJCF's
+    frictionloss is FC + FP, and its gradual build-up after a reversal is named as lost."""
+    robot = _robot(rng, n=2)
+    q = np.cumsum(rng.normal(size=(300, 2)), 0) * 0.02
+    qd = np.gradient(q, 0.01, axis=0)
+    qdd = rng.normal(size=(300, 2))
+    tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
+    data = sj.Measurements(np.arange(300) / 100.0, q, qd, qdd, tau + 0.3 * np.sign(qd))
+    fit = sj.identify(robot, data, sj.PhysicallyConsistent(sj.OLS()),
+                      sj.TorqueModel.of(robot, (sj.Presliding(),)))
+    names, values = list(fit.names), np.asarray(fit.values)
+    fp = values[[names.index("FP1"), names.index("FP2")]]
+    assert np.all(fp > 0)
+    xml = fit.mjcf()
+    m = mujoco.MjModel.from_xml_string(xml)
+    fc = np.asarray(fit.full_params).reshape(-1, 12)[:, 10]
+    np.testing.assert_allclose(m.dof_frictionloss, fc + fp, rtol=1e-12)
+    assert "presliding" in xml and "gradual build-up" in xml

@@ -124,7 +124,8 @@ class Identification:
              integrator: str = "implicitfast") -> str:
         """The identified robot as a MuJoCo model (MJCF) that MuJoCo loads as written: a
         physical fit's link parameters, each joint's ``damping`` (viscous),
-        ``frictionloss`` (Coulomb) and ``armature`` (a rotor inertia term), one torque
+        ``frictionloss`` (Coulomb, and a term's dry friction such as friction at rest's
+        level) and ``armature`` (a rotor inertia term), one torque
         actuator per joint whose bias is the torque offset, so that ``ctrl`` is the
         torque as measured (:func:`~sedsabso_jax.dynamics.to_mjcf`; ``limits``,
         ``timestep``, ``integrator`` its). What MuJoCo has no parameter for is listed in
@@ -139,7 +140,9 @@ class Identification:
         held = simulated(self.model, self.values)
         comment = (f"identified by sedsabso-jax {__version__} ({self.method}, physically "
                    f"consistent, friction {self.model.friction}); {held.comment()}")
-        return to_mjcf(self.model.robot, self.full_params, armature=held.armature,
+        p = np.asarray(self.full_params, dtype=float).reshape(-1, 12).copy()
+        p[:, 10] += held.frictionloss  # a term's dry friction joins the Coulomb level
+        return to_mjcf(self.model.robot, p.ravel(), armature=held.armature,
                        offset=held.offset, limits=limits, timestep=timestep,
                        integrator=integrator, comment=comment)
 

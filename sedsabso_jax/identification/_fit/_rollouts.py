@@ -41,17 +41,18 @@ class ModelTorque(eqx.Module):
 
 def simulated_dynamics(ident) -> tuple[Robot, np.ndarray, np.ndarray, ModelTorque]:
     """``(robot, params, armature, extra)`` of a physical fit for
-    :func:`~sedsabso_jax.dynamics.rollout`: the links and viscous friction (Coulomb's
-    moved to ``extra``, in the model's shape), the armature and offsets of its terms
-    (:func:`~._simulator.simulated`; what no simulator holds is left out here too)."""
+    :func:`~sedsabso_jax.dynamics.rollout`: the links and viscous friction (Coulomb's,
+    with its terms' dry friction, moved to ``extra`` in the model's shape), the armature
+    and offsets of its terms (:func:`~._simulator.simulated`; what no simulator holds is
+    left out here too, as from the MJCF)."""
     if ident.full_params is None:
         raise ValueError("a rollout needs the full link parameters of a physically "
                          "consistent fit: identify with PhysicallyConsistent(...) "
                          "(--physical)")
     p = np.asarray(ident.full_params, dtype=float).reshape(-1, 12).copy()
-    fc = p[:, 10].copy()
-    p[:, 10] = 0.0
     held = simulated(ident.model, ident.values)
+    fc = p[:, 10] + held.frictionloss  # as the MJCF: a term's dry friction joins it
+    p[:, 10] = 0.0
     return (ident.model.robot, p.ravel(), held.armature,
             ModelTorque(jnp.asarray(fc), jnp.asarray(held.offset), ident.model))
 

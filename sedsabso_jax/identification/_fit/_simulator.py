@@ -14,11 +14,13 @@ from .._model._torque_model import TorqueModel
 @dataclasses.dataclass(frozen=True, eq=False)
 class Simulated:
     """The joint-space quantities beyond the links' 12 parameters a simulator holds
-    (``armature``, ``offset``, each ``(n,)``) and what it cannot hold: ``left_out`` a line
-    per term or part of a term (its ``--friction`` word, then what)."""
+    (``armature``, ``offset``, ``frictionloss``, dry friction beyond the links' Coulomb
+    friction, each ``(n,)``) and what it cannot hold: ``left_out`` a line per term or part
+    of a term (its ``--friction`` word, then what)."""
 
     armature: np.ndarray
     offset: np.ndarray
+    frictionloss: np.ndarray
     left_out: tuple[str, ...]
 
     def comment(self) -> str:
@@ -39,7 +41,7 @@ def term_values(model: TorqueModel, values: np.ndarray) -> list[np.ndarray]:
 def simulated(model: TorqueModel, values: np.ndarray) -> Simulated:
     """What a simulator holds of ``model`` at ``values`` (its terms beyond the links)."""
     n = model.robot.n_joints
-    armature, offset, left_out = np.zeros(n), np.zeros(n), []
+    armature, offset, frictionloss, left_out = np.zeros(n), np.zeros(n), np.zeros(n), []
     for term, coefficients in zip(model.terms, term_values(model, values)):
         held = term.held(model, coefficients)
         if held is None:
@@ -51,9 +53,11 @@ def simulated(model: TorqueModel, values: np.ndarray) -> Simulated:
             armature = armature + held.armature
         if held.offset is not None:
             offset = offset + held.offset
+        if held.frictionloss is not None:
+            frictionloss = frictionloss + held.frictionloss
         if held.lost:
             left_out.append(f"{term.text}: {held.lost}")
-    return Simulated(armature, offset, tuple(left_out))
+    return Simulated(armature, offset, frictionloss, tuple(left_out))
 
 
 def mujoco_torques(xml: str, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray

@@ -6,10 +6,11 @@ from typing import Any, ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 
 from ._dahl import dahl_state, presliding_state
 from ._scales import AbstractScale, as_scale
-from ._term import AbstractTerm, ModelView, Signals, diagonal
+from ._term import AbstractTerm, InSimulator, ModelView, Signals, diagonal
 
 #: Characteristic displacement (rad or m) of :class:`Presliding` unless told.
 PRESLIDING_DISPLACEMENT = 0.002
@@ -45,6 +46,14 @@ class Presliding(AbstractScale):
     largest: float | None = None
     name: ClassVar[str] = "presliding"
     unit: ClassVar[str] = "N m for friction at rest FP (the torque it saturates at)"
+
+    def held(self, model: ModelView, values: Any) -> InSimulator:
+        """Dry friction: ``FP`` is the torque it saturates at in steady sliding, which a
+        simulator's dry friction (MuJoCo's ``frictionloss``, a constraint that also holds
+        the joint at rest) adds to the Coulomb level."""
+        return InSimulator(frictionloss=np.asarray(values, dtype=float),
+                           lost="its gradual build-up over the displacement q_c after a "
+                           "reversal (a simulator's dry friction turns at once)")
     nonnegative: ClassVar[bool] = True
     #: The displacements' search box (rad or m).
     bounds: ClassVar[tuple[float, float]] = (1e-5, 0.5)

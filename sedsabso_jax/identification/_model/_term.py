@@ -115,11 +115,13 @@ class Signals:
 class InSimulator:
     """What a rigid-body simulator (MuJoCo) holds of a term, per joint (``(n,)`` each,
     None: nothing of that kind): the rotor inertia seen at the joint (``armature``), a
-    torque the actuators subtract from the measured one (``offset``); ``lost``: what of
-    the term it cannot hold, in words (empty: nothing)."""
+    torque the actuators subtract from the measured one (``offset``), dry friction added
+    to the joint's Coulomb friction (``frictionloss``); ``lost``: what of the term it
+    cannot hold, in words (empty: nothing)."""
 
     armature: np.ndarray | None = None
     offset: np.ndarray | None = None
+    frictionloss: np.ndarray | None = None
     lost: str = ""
 
 
