@@ -6,6 +6,8 @@ consistent, as ``identify --mjcf-out``) and written with ``report.with_mjcf``:
 - ``default``: the default's choice (its terms MuJoCo cannot hold left out of the file);
 - ``--mujoco-terms``: the choice among the default's candidates with only the terms
   MuJoCo holds in full, no friction at rest;
+- the latter driven by its own predicted torques instead of the measured ones (the
+  rollouts then check the simulation, not the model);
 - the latter's file with MuJoCo's default dry-friction impedance (``solimpfriction``
   unset), which the writer replaces.
 
@@ -97,6 +99,10 @@ def main(argv=None) -> int:
             os.makedirs(args.mjcf_dir, exist_ok=True)
             with open(os.path.join(args.mjcf_dir, f"{name.strip('-')}.xml"), "w") as f:
                 f.write(report.mjcf)
+    own = sj.Measurements(held_out.times, held_out.q, held_out.qd, held_out.qdd,
+                          report.ident.predict(held_out.q, held_out.qd, held_out.qdd))
+    rows.append(row("--mujoco-terms, driven by its own predicted torques (checks the "
+                    "simulation)", report, report.mjcf, own, limits))
     soft = re.sub(r'<joint solimpfriction="[^"]*"/>', "", report.mjcf)
     rows.append(row("--mujoco-terms, MuJoCo's default friction impedance", report, soft,
                     held_out, limits))

@@ -20,6 +20,10 @@ from ._simulator import import_mujoco, simulated
 LENGTHS = (0.2, 0.5)
 #: Windows per recording, evenly spaced over it.
 WINDOWS = 64
+#: The velocity scale (rad/s or m/s) of the JAX rollouts' ``sign(qd)``: ``tanh(qd / v)``,
+#: stiff, which the linearly implicit Euler holds (an explicit ``sign`` chatters about
+#: rest and never sticks).
+STICKING_VELOCITY = 1e-3
 #: The longest integrator step of the JAX rollouts (s): a sample period is split into
 #: as many substeps as that needs (linearly implicit Euler is first order).
 LONGEST_STEP = 0.001
@@ -28,14 +32,17 @@ LONGEST_STEP = 0.001
 class ModelTorque(eqx.Module):
     """The torques an identified model adds to its rigid body as a function of the state:
     its Coulomb friction ``fc`` in the model's own shape (a smooth Coulomb's ``tanh``, else
-    ``sign``) and its torque offsets (``extra`` of :func:`~sedsabso_jax.dynamics.rollout`)."""
+    ``sign``, regularised as ``tanh(qd /`` :data:`STICKING_VELOCITY` ``)`` so that a joint
+    sticks as its friction makes it) and its torque offsets (``extra`` of :func:`~sedsabso_jax.dynamics.rollout`)."""
 
     fc: Array
     offset: Array
     model: Any  # the TorqueModel (its Coulomb shape)
 
     def __call__(self, q: Array, qd: Array) -> Array:
-        shape, _ = self.model.coulomb(qd, jnp)
+        shape, reshaped = self.model.coulomb(qd, jnp)
+        if not reshaped:  # sign(qd), regularised: stiff, held by the implicit integrator
+            shape = jnp.tanh(qd / STICKING_VELOCITY)
         return self.fc * shape + self.offset
 
 
