@@ -19,6 +19,7 @@ from ._inertia import pseudo_inertia as pseudo_inertia
 from ._kinematics import link_poses as link_poses
 from ._limits import joint_limits as joint_limits
 from ._mjcf import MJCFError as MJCFError
+from ._mjcf_update import update_mjcf as update_mjcf
 from ._mjcf_writer import to_mjcf as to_mjcf
 from ._regressor import chunk_size as chunk_size
 from ._regressor import unchecked_regressor as unchecked_regressor
@@ -32,7 +33,7 @@ from ._urdf_writer import update_urdf as update_urdf
 __all__ = [
     "URDFError", "MJCFError", "unchecked_regressor", "chunk_size", "random_states",
     "joint_limits",
-    "pseudo_inertia", "from_pseudo_inertia", "params_from_com", "to_urdf", "to_mjcf", "update_urdf",
+    "pseudo_inertia", "from_pseudo_inertia", "params_from_com", "to_urdf", "to_mjcf", "update_urdf", "update_mjcf",
     "link_poses", "fixed_link_pose",
     "LINK_PARAMETERS", "N_LINK_PARAMETERS",
     "mass_matrix", "forward_dynamics", "rollout", "windows", "end_errors",
