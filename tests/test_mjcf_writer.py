@@ -203,3 +203,27 @@ def test_friction_at_rest_is_held_as_dry_friction(rng):
     fc = np.asarray(fit.full_params).reshape(-1, 12)[:, 10]
     np.testing.assert_allclose(m.dof_frictionloss, fc + fp, rtol=1e-12)
     assert "presliding" in xml and "gradual build-up" in xml
+
+
+def test_identified_into_the_users_mjcf(rng, tmp_path):
+    """``mjcf(source)``: the user's MJCF (read with from_mjcf) with the identified links
+    and joint friction written into it, its actuators kept (so the offsets are named, not
+    written): read back, it is the fit."""
+    from conftest import random_mjcf
+
+    path = tmp_path / "arm.xml"
+    path.write_text(random_mjcf(rng, 3, damping=True, gravity=[0, 0, -9.81]))
+    robot = sj.robots.from_mjcf(path)
+    q, qd, qdd = rng.uniform(-2, 2, (3, 300, 3))
+    tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd)) + [0.3, 0, -0.2]
+    data = sj.Measurements(np.arange(300) / 100.0, q, qd, qdd, tau)
+    fit = sj.identify(robot, data, sj.PhysicallyConsistent(sj.OLS()),
+                      sj.TorqueModel.of(robot, (sj.Offset(),)))
+    out = tmp_path / "arm_identified.xml"
+    out.write_text(fit.mjcf(path))
+    text = out.read_text()
+    assert "the file's own actuators are kept (OFF = 0.3" in text
+    assert text.count("<motor") == 3  # the user's actuators
+    back = sj.robots.from_mjcf(out)
+    np.testing.assert_allclose(np.asarray(back.params), fit.full_params,
+                               atol=1e-9 * np.abs(fit.full_params).max())

@@ -120,16 +120,21 @@ class Identification:
             return update_urdf(source, self.model.robot, self.full_params, comment=comment)
         return to_urdf(self.model.robot, self.full_params, comment=comment)
 
-    def mjcf(self, *, limits: JointLimits | None = None, timestep: float = 0.002,
+    def mjcf(self, source: str | os.PathLike[str] | None = None, *,
+             limits: JointLimits | None = None, timestep: float = 0.002,
              integrator: str = "implicitfast") -> str:
         """The identified robot as a MuJoCo model (MJCF) that MuJoCo loads as written: a
         physical fit's link parameters, each joint's ``damping`` (viscous),
         ``frictionloss`` (Coulomb, and a term's dry friction such as friction at rest's
-        level) and ``armature`` (a rotor inertia term), one torque
-        actuator per joint whose bias is the torque offset, so that ``ctrl`` is the
-        torque as measured (:func:`~sedsabso_jax.dynamics.to_mjcf`; ``limits``,
-        ``timestep``, ``integrator`` its). What MuJoCo has no parameter for is listed in
-        a comment (:func:`~._simulator.simulated`)."""
+        level) and ``armature`` (a rotor inertia term), one torque actuator per joint
+        whose bias is the torque offset, so that ``ctrl`` is the torque as measured
+        (:func:`~sedsabso_jax.dynamics.to_mjcf`; ``limits``, ``timestep``, ``integrator``
+        its). With ``source``, the MJCF the robot was read from, that file with the
+        links' inertials and the joints' friction and armature replaced and all else
+        kept, its actuators too, so the offsets are not written
+        (:func:`~sedsabso_jax.dynamics.update_mjcf`). What MuJoCo has no parameter for is
+        listed in a comment (:func:`~._simulator.simulated`)."""
+        from ...dynamics._mjcf_update import update_mjcf
         from ...dynamics._mjcf_writer import to_mjcf
         from ._simulator import simulated
 
@@ -138,10 +143,19 @@ class Identification:
                              "consistent fit: identify with PhysicallyConsistent(...) "
                              "(--physical)")
         held = simulated(self.model, self.values)
-        comment = (f"identified by sedsabso-jax {__version__} ({self.method}, physically "
-                   f"consistent, friction {self.model.friction}); {held.comment()}")
         p = np.asarray(self.full_params, dtype=float).reshape(-1, 12).copy()
         p[:, 10] += held.frictionloss  # a term's dry friction joins the Coulomb level
+        left_out = held.left_out
+        if source is not None and np.any(held.offset):
+            left_out += ("offset: the file's own actuators are kept (OFF = "
+                         + ", ".join(f"{v:.4g}" for v in held.offset) + " N m)",)
+        comment = (f"identified by sedsabso-jax {__version__} ({self.method}, physically "
+                   f"consistent, friction {self.model.friction}); "
+                   + ("not held by the simulator (left out): " + "; ".join(left_out)
+                      if left_out else "every term of the model is held"))
+        if source is not None:
+            return update_mjcf(source, self.model.robot, p.ravel(), armature=held.armature,
+                               comment=comment)
         return to_mjcf(self.model.robot, p.ravel(), armature=held.armature,
                        offset=held.offset, limits=limits, timestep=timestep,
                        integrator=integrator, comment=comment)

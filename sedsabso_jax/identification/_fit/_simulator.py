@@ -23,11 +23,6 @@ class Simulated:
     frictionloss: np.ndarray
     left_out: tuple[str, ...]
 
-    def comment(self) -> str:
-        """One line for a model file."""
-        return ("not held by the simulator (left out): " + "; ".join(self.left_out)
-                if self.left_out else "every term of the model is held")
-
 
 def term_values(model: TorqueModel, values: np.ndarray) -> list[np.ndarray]:
     """Each term's coefficients (one per its names) from the model's ``values``; a column
