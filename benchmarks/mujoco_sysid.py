@@ -334,7 +334,9 @@ def sysid_fit(xml_text: str, data, residual: str = "torque", *, limits=None,
     fitted = write_mjcf(xml_text, sysid.apply_param_modifiers(params, spec))
     for h in history:
         h["stopped"] = stopped
-    return fitted, cpu, len(history), history
+    # the optimizer logs each iteration and, on a normal end, the final point once more
+    iterations = len(history) - (stopped != "time budget")
+    return fitted, cpu, iterations, history
 
 
 def nominal_mjcf(timestep: float) -> str:
