@@ -237,6 +237,25 @@ def mujoco_rollout_errors(xml_text: str, data, window_s: float, stride_s: float 
     return np.degrees(np.abs(q[:, -1] - end))
 
 
+def kinematic_rollout_errors(data, windows_s=(0.2, 0.5)) -> dict:
+    """References without a model: each window's end error per joint (degrees) of holding
+    the start position, and of extrapolating the start state at constant velocity and at
+    constant acceleration (the measured q, qd, qdd at the window start), same windows as
+    :func:`mujoco_rollout_errors`."""
+    dt = float(np.median(np.diff(data.times)))
+    out = {"hold": {}, "constant velocity": {}, "constant acceleration": {}}
+    for w_s in windows_s:
+        window = int(round(w_s / dt))
+        k = _windows(len(data.q), window, window)
+        t = window * dt
+        dq = data.q[k + window] - data.q[k]
+        out["hold"][w_s] = np.degrees(np.abs(dq))
+        out["constant velocity"][w_s] = np.degrees(np.abs(dq - data.qd[k] * t))
+        out["constant acceleration"][w_s] = np.degrees(
+            np.abs(dq - data.qd[k] * t - 0.5 * data.qdd[k] * t**2))
+    return out
+
+
 def torque_nrms(xml_text: str, data, limits) -> float:
     m = mujoco.MjModel.from_xml_string(xml_text)
     tau = inverse_torques(m, mujoco.MjData(m), data.q, data.qd, data.qdd)
@@ -286,19 +305,25 @@ def _rollout_residual(spec, data, window, stride):
 
 def sysid_fit(xml_text: str, data, residual: str = "torque", *, limits=None,
               windows_s: float = 0.5, max_iterations: int = 100,
-              time_budget_s: float | None = None, x_scale="jac"):
+              time_budget_s: float | None = None, x_scale="jac",
+              joint_terms_only: bool = False):
     """``mujoco.sysid.optimize`` from the MJCF ``xml_text`` on ``data``.
 
     Returns ``(fitted MJCF text, CPU seconds, iterations, history)``; history: one dict per
     iteration (``cpu_s``, ``wall_s``, ``objective``). Stops after ``max_iterations`` or,
     at the end of the first iteration past ``time_budget_s`` CPU seconds, with the last
-    iterate."""
+    iterate. ``joint_terms_only``: the bodies' inertias frozen at the start's (armature,
+    damping, frictionloss and offsets fitted)."""
     spec = mujoco.MjSpec.from_string(xml_text)
     # the pseudo-inertia keeps every body physically consistent, but a thin body's
     # A + B >= C can fail by rounding: let MuJoCo balance it where it does
     spec.compiler.balanceinertia = True
     model = spec.compile()
     params = sysid_params(spec, model)
+    if joint_terms_only:
+        for name, p in params.items():
+            if name.endswith("_inertia"):
+                p.frozen = True
     _clip_into_bounds(params)
     if residual == "torque":
         fn = _torque_residual(spec, data, limits)
@@ -363,8 +388,9 @@ def main(argv=None):
     ap.add_argument("--budget", type=float, default=300.0,
                     help="CPU seconds per fit (stops at the end of that iteration)")
     ap.add_argument("--max-iterations", type=int, default=100)
-    ap.add_argument("--starts", default="package,nominal")
-    ap.add_argument("--residuals", default="torque,rollout")
+    ap.add_argument("--fits", default="package:torque,package:rollout,package:rollout:joints,"
+                    "nominal:torque,nominal:rollout",
+                    help="start:residual[:joints] (joints: inertias frozen at the start's)")
     ap.add_argument("--json", default=None)
     ap.add_argument("--save-dir", default=None, help="write each fitted MJCF there")
     args = ap.parse_args(argv)
@@ -389,22 +415,35 @@ def main(argv=None):
               f"{row['rollout_0.5s_median_deg']:.3f} deg, cpu {cpu}, it {iterations}",
               flush=True)
 
+    baselines = {f"{kind} (no model)": errs
+                 for kind, errs in kinematic_rollout_errors(held_out).items()}
+    for name, errs in baselines.items():
+        rows.append({"model": name, "held_out_nrms_percent": None,
+                     "fit_nrms_percent": None,
+                     "rollout_0.2s_median_deg": float(np.median(errs[0.2])),
+                     "rollout_0.5s_median_deg": float(np.median(errs[0.5])),
+                     "rollout_0.5s_median_deg_per_joint": np.median(errs[0.5], axis=0),
+                     "cpu_s": None, "wall_s": None, "iterations": None, "history": None})
     add("package MJCF as written", package_xml)
-    for start in args.starts.split(","):
-        if start != "package":
+    seen = {"package"}
+    for fit in args.fits.split(","):
+        start, residual, *rest = fit.split(":")
+        joints = rest == ["joints"]
+        if start not in seen:
             add(f"{start} start (no fit)", starts[start])
-        for residual in args.residuals.split(","):
-            w0 = time.perf_counter()
-            xml, cpu, its, hist = sysid_fit(starts[start], fit_data, residual,
-                                            limits=limits, max_iterations=max_it,
-                                            time_budget_s=args.budget)
-            wall = time.perf_counter() - w0
-            name = f"mujoco.sysid {residual} residual, {start} start"
-            if args.save_dir:
-                with open(f"{args.save_dir}/sysid_{residual}_{start}.xml", "w",
-                          encoding="utf-8") as f:
-                    f.write(xml)
-            add(name, xml, cpu, wall, its, hist)
+            seen.add(start)
+        w0 = time.perf_counter()
+        xml, cpu, its, hist = sysid_fit(starts[start], fit_data, residual, limits=limits,
+                                        max_iterations=max_it, time_budget_s=args.budget,
+                                        joint_terms_only=joints)
+        wall = time.perf_counter() - w0
+        name = (f"mujoco.sysid {residual} residual, {start} start"
+                + (", inertias frozen" if joints else ""))
+        if args.save_dir:
+            with open(f"{args.save_dir}/sysid_{fit.replace(':', '_')}.xml", "w",
+                      encoding="utf-8") as f:
+                f.write(xml)
+        add(name, xml, cpu, wall, its, hist)
     print()
     print("| model | held-out NRMS [%] | fit NRMS [%] | rollout 0.2 s [deg] | "
           "rollout 0.5 s [deg] | CPU [s] | wall [s] | iterations |")
@@ -413,8 +452,9 @@ def main(argv=None):
         cpu = "-" if r["cpu_s"] is None else f"{r['cpu_s']:.0f}"
         wall = "-" if r["wall_s"] is None else f"{r['wall_s']:.0f}"
         its = "-" if r["iterations"] is None else str(r["iterations"])
-        print(f"| {r['model']} | {r['held_out_nrms_percent']:.4f} | "
-              f"{r['fit_nrms_percent']:.4f} | {r['rollout_0.2s_median_deg']:.3f} | "
+        ho = "-" if r["held_out_nrms_percent"] is None else f"{r['held_out_nrms_percent']:.4f}"
+        fi = "-" if r["fit_nrms_percent"] is None else f"{r['fit_nrms_percent']:.4f}"
+        print(f"| {r['model']} | {ho} | {fi} | {r['rollout_0.2s_median_deg']:.3f} | "
               f"{r['rollout_0.5s_median_deg']:.3f} | {cpu} | {wall} | {its} |")
     if args.json:
         doc = {"rows": rows, "mjcf": args.mjcf, "quick": args.quick,
