@@ -44,9 +44,8 @@ import numpy as np
 
 import sedsabso_jax as sj
 from benchmarks.output import to_json
-from sedsabso_jax.dynamics._limits import joint_limits
-from sedsabso_jax.dynamics._mjcf_writer import to_mjcf
-from sedsabso_jax.identification._metrics import validation_metrics
+from sedsabso_jax import validation_metrics
+from sedsabso_jax.dynamics import joint_limits
 
 
 class _Budget(Exception):
@@ -364,9 +363,35 @@ def sysid_fit(xml_text: str, data, residual: str = "torque", *, limits=None,
     return fitted, cpu, iterations, history
 
 
-def nominal_mjcf(timestep: float) -> str:
-    """The URDF's model as MJCF: CAD inertias, no friction, armature or offset."""
-    return to_mjcf(sj.robots.kuka_lwr4(), timestep=timestep)
+def nominal_mjcf(package_xml: str) -> str:
+    """The package's MJCF (same bodies, frames, timestep, actuators) with the URDF's own
+    inertials and joint damping and friction (as MuJoCo reads the URDF
+    ``sj.robots.kuka_lwr4_urdf()``, meshes dropped: viscous damping 0.2-1.2 N m s/rad, no
+    dry friction), no armature and no offset."""
+    with sj.robots.kuka_lwr4_urdf() as path:
+        urdf = ET.parse(path).getroot()
+    for link in urdf.iter("link"):
+        for tag in ("visual", "collision"):
+            for el in link.findall(tag):
+                link.remove(el)
+    cad = mujoco.MjModel.from_xml_string(ET.tostring(urdf, encoding="unicode"))
+    spec = mujoco.MjSpec.from_string(package_xml)
+    for body in spec.bodies[1:]:
+        b = cad.body(body.name)
+        body.explicitinertial = True
+        body.mass, body.ipos = float(b.mass[0]), b.ipos.copy()
+        body.inertia, body.iquat = b.inertia.copy(), b.iquat.copy()
+        body.fullinertia = np.full(6, np.nan)
+    for joint in spec.joints:
+        j = cad.joint(joint.name)
+        joint.armature = 0.0
+        joint.frictionloss = float(cad.dof_frictionloss[j.dofadr[0]])
+        damping = np.zeros_like(np.array(joint.damping, dtype=float))
+        damping.ravel()[0] = cad.dof_damping[j.dofadr[0]]
+        joint.damping = damping
+    for act in spec.actuators:
+        act.biasprm = np.zeros_like(np.array(act.biasprm, dtype=float))
+    return write_mjcf(package_xml, spec.compile())
 
 
 def evaluate(xml_text, fit_data, held_out, limits):
@@ -399,8 +424,7 @@ def main(argv=None):
     limits = np.asarray(joint_limits("kuka_lwr4", sj.robots.kuka_lwr4()).tau_max)
     with open(args.mjcf, encoding="utf-8") as f:
         package_xml = f.read()
-    dt = float(np.median(np.diff(fit_data.times)))
-    starts = {"package": package_xml, "nominal": nominal_mjcf(dt)}
+    starts = {"package": package_xml, "nominal": nominal_mjcf(package_xml)}
     max_it = 3 if args.quick else args.max_iterations
     rows = []
 
