@@ -32,7 +32,6 @@ import time
 import warnings
 
 import jax
-import numpy as np
 
 import sedsabso_jax as sj
 from benchmarks.output import to_json
@@ -45,7 +44,6 @@ from sedsabso_jax.identification import (
     mujoco_torques,
     rollout_errors,
 )
-from sedsabso_jax.identification._metrics import validation_metrics
 
 
 def choose(robot, data, held_out, limits, mujoco_terms: bool):
@@ -67,9 +65,9 @@ def choose(robot, data, held_out, limits, mujoco_terms: bool):
 def row(name, report, xml, held_out, limits, cpu=None):
     ident = report.ident
     nrms = {
-        "own": validation_metrics(held_out.tau, ident.predict(held_out.q, held_out.qd,
+        "own": sj.validation_metrics(held_out.tau, ident.predict(held_out.q, held_out.qd,
                                                               held_out.qdd), limits),
-        "mujoco": validation_metrics(held_out.tau, mujoco_torques(
+        "mujoco": sj.validation_metrics(held_out.tau, mujoco_torques(
             xml, held_out.q, held_out.qd, held_out.qdd), limits)}
     r = rollout_errors(ident, held_out, xml)
     medians = r.medians()

@@ -484,7 +484,8 @@ def main(argv=None):
         doc = {"rows": rows, "mjcf": args.mjcf, "quick": args.quick,
                "budget_cpu_s": args.budget, "max_iterations": max_it,
                "mujoco": mujoco.__version__,
-               "command": "python -m benchmarks.mujoco_sysid " + " ".join(sys.argv[1:] if argv is None else argv)}
+               "command": "python -m benchmarks.mujoco_sysid "
+               + " ".join(sys.argv[1:] if argv is None else argv)}
         with open(args.json, "w", encoding="utf-8") as f:
             f.write(to_json(doc))
 

@@ -96,7 +96,7 @@ def test_kuka_real_data_end_to_end(tmp_path, capsys):
     assert code == 0
     doc = json.loads((tmp_path / "r.json").read_text())
     assert set(doc) == {"base_parameters", "fit", "validation", "settings",
-                        "cross_validation", "extrapolation", "rests", "validations"}
+                        "cross_validation", "extrapolation", "rests", "validations", "mujoco"}
     assert len(doc["base_parameters"]["names"]) == len(doc["base_parameters"]["values"])
     val = doc["validation"]
     assert len(val["nrms_range_percent"]) == len(val["relative_rms_percent"]) == 7

@@ -33,7 +33,8 @@ from ._urdf_writer import update_urdf as update_urdf
 __all__ = [
     "URDFError", "MJCFError", "unchecked_regressor", "chunk_size", "random_states",
     "joint_limits",
-    "pseudo_inertia", "from_pseudo_inertia", "params_from_com", "to_urdf", "to_mjcf", "update_urdf", "update_mjcf",
+    "pseudo_inertia", "from_pseudo_inertia", "params_from_com", "to_urdf", "to_mjcf",
+    "update_urdf", "update_mjcf",
     "link_poses", "fixed_link_pose",
     "LINK_PARAMETERS", "N_LINK_PARAMETERS",
     "mass_matrix", "forward_dynamics", "rollout", "windows", "end_errors",

@@ -31,7 +31,7 @@ from ._robot import Robot
 _INSTALL = "MJCF needs the mujoco extra: pip install 'sedsabso-jax[mujoco]'"
 #: MuJoCo's ``mjtJoint`` values.
 _FREE, _BALL, _SLIDE, _HINGE = 0, 1, 2, 3
-_KIND = {_SLIDE: "prismatic", _HINGE: "revolute"}
+JOINT_KIND = {_SLIDE: "prismatic", _HINGE: "revolute"}
 _MJ_NAME = {_FREE: "free", _BALL: "ball", _SLIDE: "slide", _HINGE: "hinge"}
 
 
@@ -39,7 +39,7 @@ class MJCFError(ValueError):
     """An MJCF file that cannot be turned into a serial chain."""
 
 
-def _compile(path: PathLike) -> tuple[Any, Any, str]:
+def compiled(path: PathLike) -> tuple[Any, Any, str]:
     """``(mujoco, compiled model, path)``; an MJCFError when MuJoCo cannot compile it."""
     path = os.fspath(path)
     if not os.path.isfile(path):
@@ -57,7 +57,7 @@ def _compile(path: PathLike) -> tuple[Any, Any, str]:
     return mujoco, model, path
 
 
-def _name(mujoco: Any, m: Any, kind: str, i: int) -> str:
+def object_name(mujoco: Any, m: Any, kind: str, i: int) -> str:
     obj = getattr(mujoco.mjtObj, f"mjOBJ_{kind.upper()}")
     return mujoco.mj_id2name(m, obj, i) or f"{kind}{i}"
 
@@ -105,7 +105,7 @@ def _at_zero(m: Any, b: int) -> np.ndarray:
     (ball and free joints at their reference)."""
     T = sp.transform(_rotation(m.body_quat[b]), m.body_pos[b])
     for j in range(m.body_jntadr[b], m.body_jntadr[b] + m.body_jntnum[b]):
-        if m.jnt_type[j] in _KIND:
+        if m.jnt_type[j] in JOINT_KIND:
             T = T @ _motion(_screw(m, j), -float(m.qpos0[m.jnt_qposadr[j]]))
     return T
 
@@ -115,13 +115,13 @@ def _chain(mujoco: Any, m: Any, path: str, tip: str | None) -> list[int]:
     children: dict[int, list[int]] = {b: [] for b in range(m.nbody)}
     for b in range(1, m.nbody):
         children[int(m.body_parentid[b])].append(b)
-    names = {_name(mujoco, m, "body", b): b for b in range(m.nbody)}
+    names = {object_name(mujoco, m, "body", b): b for b in range(m.nbody)}
 
     def moves(b: int) -> bool:
         return bool(m.body_jntnum[b]) or any(moves(c) for c in children[b])
 
     def leaves(b: int) -> list[str]:
-        return ([_name(mujoco, m, "body", b)] if not children[b]
+        return ([object_name(mujoco, m, "body", b)] if not children[b]
                 else [x for c in children[b] for x in leaves(c)])
 
     if tip is None:
@@ -132,8 +132,8 @@ def _chain(mujoco: Any, m: Any, path: str, tip: str | None) -> list[int]:
                 break
             if len(onward) > 1:
                 raise MJCFError(
-                    f"MJCF {path!r} branches at body {_name(mujoco, m, 'body', b)!r} into "
-                    f"bodies {[_name(mujoco, m, 'body', c) for c in onward]}; choose the tip "
+                    f"MJCF {path!r} branches at body {object_name(mujoco, m, 'body', b)!r} into "
+                    f"bodies {[object_name(mujoco, m, 'body', c) for c in onward]}; choose the tip "
                     f"body (--tip on the command line, tip= in Python), one of "
                     f"{sorted(x for c in onward for x in leaves(c))}")
             bodies.append(onward[0])
@@ -160,21 +160,21 @@ def from_mjcf(path: PathLike, *, tip: str | None = None, name: str | None = None
     stiffness, armature and gravity compensation are not part of the model (armature:
     :func:`armature_from_mjcf`). An MJCFError (a ValueError) says what cannot be read.
     """
-    mujoco, m, path = _compile(path)
+    mujoco, m, path = compiled(path)
     bodies = _chain(mujoco, m, path, tip)
     on_path = set(bodies)
     for b in bodies:
         if m.body_jntnum[b] > 1:
             js = range(m.body_jntadr[b], m.body_jntadr[b] + m.body_jntnum[b])
             raise MJCFError(
-                f"MJCF {path!r}: body {_name(mujoco, m, 'body', b)!r} has "
-                f"{m.body_jntnum[b]} joints {[_name(mujoco, m, 'joint', j) for j in js]}; "
+                f"MJCF {path!r}: body {object_name(mujoco, m, 'body', b)!r} has "
+                f"{m.body_jntnum[b]} joints {[object_name(mujoco, m, 'joint', j) for j in js]}; "
                 "expected at most one per body on the chain (a serial chain)")
         j = m.body_jntadr[b]
-        if m.body_jntnum[b] and m.jnt_type[j] not in _KIND:
+        if m.body_jntnum[b] and m.jnt_type[j] not in JOINT_KIND:
             raise MJCFError(
-                f"MJCF {path!r}: joint {_name(mujoco, m, 'joint', j)!r} of body "
-                f"{_name(mujoco, m, 'body', b)!r} is a {_MJ_NAME[int(m.jnt_type[j])]} joint; "
+                f"MJCF {path!r}: joint {object_name(mujoco, m, 'joint', j)!r} of body "
+                f"{object_name(mujoco, m, 'body', b)!r} is a {_MJ_NAME[int(m.jnt_type[j])]} joint; "
                 "supported on the chain: hinge, slide (and bodies without a joint)")
     children: dict[int, list[int]] = {b: [] for b in range(m.nbody)}
     for b in range(1, m.nbody):
@@ -188,7 +188,7 @@ def from_mjcf(path: PathLike, *, tip: str | None = None, name: str | None = None
         for c in children[b]:
             if c in on_path:
                 continue
-            locked.extend(_name(mujoco, m, "joint", j) for j in
+            locked.extend(object_name(mujoco, m, "joint", j) for j in
                           range(m.body_jntadr[c], m.body_jntadr[c] + m.body_jntnum[c]))
             total = total + transform_params(_at_zero(m, c), rigid_subtree(c))
         return total
@@ -207,9 +207,9 @@ def from_mjcf(path: PathLike, *, tip: str | None = None, name: str | None = None
         j, d = m.body_jntadr[b], m.jnt_dofadr[m.body_jntadr[b]]
         T_fixed.append(T_acc)
         screws.append(_screw(m, j))
-        types.append(_KIND[int(m.jnt_type[j])])
-        jnames.append(_name(mujoco, m, "joint", j))
-        lnames.append(_name(mujoco, m, "body", b))
+        types.append(JOINT_KIND[int(m.jnt_type[j])])
+        jnames.append(object_name(mujoco, m, "joint", j))
+        lnames.append(object_name(mujoco, m, "body", b))
         body_params = np.r_[rigid_subtree(b), float(m.dof_frictionloss[d]),
                             float(m.dof_damping[d])]
         T_acc = np.eye(4)
@@ -221,7 +221,7 @@ def from_mjcf(path: PathLike, *, tip: str | None = None, name: str | None = None
         warnings.warn(f"MJCF {path!r}: joints {sorted(locked)} are off the chain world -> "
                       f"{lnames[-1]!r}; they are locked at 0 and their bodies carried rigidly",
                       stacklevel=2)
-    armed = [jn for jn, a in zip(jnames, _armature(mujoco, m, path, jnames)) if a]
+    armed = [jn for jn, a in zip(jnames, joint_side_armature(mujoco, m, path, jnames)) if a]
     if armed:
         warnings.warn(f"MJCF {path!r}: joints {armed} have an armature, which the rigid-body "
                       "Robot leaves out; armature_from_mjcf(path, robot) gives it (the "
@@ -242,12 +242,13 @@ def _joint_ids(mujoco: Any, m: Any, path: str, joint_names: Sequence[str]) -> li
         j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, jn)
         if j < 0:
             raise MJCFError(f"MJCF {path!r} has no joint {jn!r}; joints: "
-                            f"{sorted(_name(mujoco, m, 'joint', k) for k in range(m.njnt))}")
+                            f"{sorted(object_name(mujoco, m, 'joint', k) for k in range(m.njnt))}")
         ids.append(j)
     return ids
 
 
-def _armature(mujoco: Any, m: Any, path: str, joint_names: Sequence[str]) -> np.ndarray:
+def joint_side_armature(mujoco: Any, m: Any, path: str, joint_names: Sequence[str]
+                        ) -> np.ndarray:
     ids = _joint_ids(mujoco, m, path, joint_names)
     armature = np.array([float(m.dof_armature[m.jnt_dofadr[j]]) for j in ids])
     # MuJoCo >= 4: an actuator's armature too, motor side
@@ -266,8 +267,8 @@ def armature_from_mjcf(path: PathLike, robot: Robot) -> Float[np.ndarray, " n"]:
     ``armature`` times ``gear^2``. MuJoCo adds ``armature * qdd`` to the rigid body's
     torque, as the :class:`~sedsabso_jax.Armature` term does with ``IA`` and no
     transmission. The joints are found by ``robot.joint_names``."""
-    mujoco, m, path = _compile(path)
-    return _armature(mujoco, m, path, robot.joint_names)
+    mujoco, m, path = compiled(path)
+    return joint_side_armature(mujoco, m, path, robot.joint_names)
 
 
 def joint_limit_rows(path: PathLike, joint_names: Sequence[str]) -> Float[np.ndarray, "n 3"]:
@@ -277,7 +278,7 @@ def joint_limit_rows(path: PathLike, joint_names: Sequence[str]) -> Float[np.nda
     over the actuators driving the joint of ``forcerange`` where force-limited or, for a
     plain motor (fixed gain, no bias), ``|gain * gear| * max|ctrlrange|`` where
     control-limited."""
-    mujoco, m, path = _compile(path)
+    mujoco, m, path = compiled(path)
     rows = []
     for j in _joint_ids(mujoco, m, path, joint_names):
         lower, upper = (m.jnt_range[j] if m.jnt_limited[j] else (-np.inf, np.inf))

@@ -24,7 +24,7 @@ import numpy as np
 from jaxtyping import ArrayLike, Float
 
 from ._inertia import inertia_matrix
-from ._mjcf import _KIND, _armature, _compile, _name, from_mjcf
+from ._mjcf import JOINT_KIND, compiled, from_mjcf, joint_side_armature, object_name
 from ._mjcf_writer import FRICTION_SOLIMP
 from ._robot import Robot
 from ._urdf_writer import checked_params
@@ -134,7 +134,7 @@ def update_mjcf(source: str | PathLike[str], robot: Robot,
     from lxml import etree
 
     p = checked_params(robot, params, "an MJCF")
-    mujoco, m, where = _compile(source)
+    mujoco, m, where = compiled(source)
     n = robot.n_joints
     # --- the chain as MuJoCo compiles it: the movable bodies from the world to the tip
     bodies = []
@@ -142,32 +142,34 @@ def update_mjcf(source: str | PathLike[str], robot: Robot,
         b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, lname)
         j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, jname)
         if b < 1 or j < 0 or m.jnt_bodyid[j] != b or m.body_jntnum[b] != 1 or \
-                _KIND.get(int(m.jnt_type[j])) != robot.joint_types[i]:
+                JOINT_KIND.get(int(m.jnt_type[j])) != robot.joint_types[i]:
             raise ValueError(f"MJCF {where!r} does not match robot {robot.name!r}: no "
                              f"{robot.joint_types[i]} joint {jname!r} alone in body {lname!r}")
         bodies.append(b)
     on_path, b = [], bodies[-1]
     while b:
         if m.body_jntnum[b]:
-            on_path.append(_name(mujoco, m, "body", b))
+            on_path.append(object_name(mujoco, m, "body", b))
         b = int(m.body_parentid[b])
     if on_path[::-1] != list(robot.link_names):
         raise ValueError(f"MJCF {where!r} does not match robot {robot.name!r}: the movable "
                          f"bodies from the world to {robot.link_names[-1]!r} are "
                          f"{on_path[::-1]}, the robot's links {list(robot.link_names)}")
+    joint_armature: np.ndarray | None = None
     if armature is not None:
-        armature = np.asarray(armature, dtype=float)
-        if armature.shape != (n,) or not np.all(np.isfinite(armature)):
+        given = np.asarray(armature, dtype=float)
+        if given.shape != (n,) or not np.all(np.isfinite(given)):
             raise ValueError(f"armature must be {n} finite numbers (one per joint), got "
-                             f"shape {armature.shape}")
+                             f"shape {given.shape}")
         dofs = [m.jnt_dofadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, jn)]
                 for jn in robot.joint_names]
         # the actuators' share stays where it is: the joints get the rest
-        armature = armature - (_armature(mujoco, m, where, robot.joint_names)
-                               - m.dof_armature[dofs])
-        if np.any(armature < 0):
+        actuators = joint_side_armature(mujoco, m, where, robot.joint_names) \
+            - np.asarray(m.dof_armature[dofs], dtype=float)
+        joint_armature = given - actuators
+        if np.any(joint_armature < 0):
             raise ValueError(f"armature must be >= 0 (beyond the actuators' armature), "
-                             f"got joint armature {armature}")
+                             f"got joint armature {joint_armature}")
     # --- the file's own text
     parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False,
                              remove_blank_text=False, remove_comments=False)
@@ -199,8 +201,8 @@ def update_mjcf(source: str | PathLike[str], robot: Robot,
         joint.set("damping", repr(float(p[i, 11])))
         joint.set("frictionloss", repr(float(p[i, 10])))
         joint.set("solimpfriction", _vec(FRICTION_SOLIMP))
-        if armature is not None:
-            joint.set("armature", repr(float(armature[i])))
+        if joint_armature is not None:
+            joint.set("armature", repr(float(joint_armature[i])))
     if comment:
         note = etree.Comment(" " + comment.replace("--", "- -") + " ")
         note.tail = root.text

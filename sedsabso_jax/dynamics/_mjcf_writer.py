@@ -81,7 +81,8 @@ def to_mjcf(robot: Robot, params: Float[ArrayLike, " p"] | None = None, *,
         limits: the joints' position ranges, written where finite; default none. Torque
             limits are not written: the actuators pass any torque (measured torques may
             exceed a datasheet's), MuJoCo's ``forcerange`` clips them if a user adds it.
-        timestep, integrator: MuJoCo's ``<option>`` (s; one of :data:`INTEGRATORS`).
+        timestep: MuJoCo's ``<option timestep>`` (s).
+        integrator: MuJoCo's ``<option integrator>``, one of :data:`INTEGRATORS`.
         comment: an XML comment at the top of the model.
     """
     p = checked_params(robot, params, "an MJCF")
