@@ -227,3 +227,12 @@ def test_identified_into_the_users_mjcf(rng, tmp_path):
     back = sj.robots.from_mjcf(out)
     np.testing.assert_allclose(np.asarray(back.params), fit.full_params,
                                atol=1e-9 * np.abs(fit.full_params).max())
+
+
+def test_mujoco_torques_refuses_other_actuators(rng):
+    """A position servo's force depends on the state: its ctrl is no measured torque."""
+    robot = _robot(rng, n=2)
+    xml = to_mjcf(robot).replace('biasprm="-0.0 0 0"', 'biasprm="0 -10 0"', 1)
+    q = np.zeros((1, 2))
+    with pytest.raises(ValueError, match="each driven by one actuator of fixed gain"):
+        mujoco_torques(xml, q, q, q)

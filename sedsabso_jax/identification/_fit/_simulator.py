@@ -58,14 +58,24 @@ def simulated(model: TorqueModel, values: np.ndarray) -> Simulated:
 def mujoco_torques(xml: str, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray
                    ) -> np.ndarray:
     """The joint torques ``(T, n)`` as measured (each actuator's ``ctrl``) that MuJoCo's
-    inverse dynamics (``mj_inverse``) gives for the MJCF ``xml`` (one joint, one
-    actuator of fixed gain and affine bias per joint, as :func:`~sedsabso_jax.dynamics.to_mjcf`
-    writes) at the states ``(T, n)``."""
+    inverse dynamics (``mj_inverse``) gives for the MJCF ``xml`` at the states ``(T, n)``:
+    a chain of ``n`` joints, each driven by one actuator of fixed gain whose bias is a
+    constant, as :func:`~sedsabso_jax.dynamics.to_mjcf` writes it (a ValueError
+    otherwise)."""
     mujoco = import_mujoco()
     m = mujoco.MjModel.from_xml_string(xml)
     d = mujoco.MjData(m)
-    dof = m.jnt_dofadr[m.actuator_trnid[:, 0]]
     q, qd, qdd = (np.asarray(a, dtype=float) for a in (q, qd, qdd))
+    constant = (np.all(m.actuator_gaintype == mujoco.mjtGain.mjGAIN_FIXED)
+                and np.all(m.actuator_biasprm[:, 1:3] == 0.0)
+                and np.all(m.actuator_trntype == mujoco.mjtTrn.mjTRN_JOINT))
+    if (q.ndim != 2 or m.nq != q.shape[1] or m.nv != m.nq or m.nu != m.nv or not constant
+            or sorted(m.actuator_trnid[:, 0]) != list(range(m.njnt))):
+        raise ValueError(f"mujoco_torques reads a chain of {q.shape[-1]} hinge or slide "
+                         f"joints each driven by one actuator of fixed gain and constant "
+                         f"bias (as to_mjcf writes); this MJCF has {m.nq} positions, "
+                         f"{m.nv} velocities and {m.nu} actuators")
+    dof = m.jnt_dofadr[m.actuator_trnid[:, 0]]
     out = np.empty((len(q), m.nu))
     for k in range(len(q)):
         d.qpos[:], d.qvel[:], d.qacc[:] = q[k], qd[k], qdd[k]
