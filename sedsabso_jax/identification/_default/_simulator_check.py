@@ -58,7 +58,8 @@ class SimulatorCheck:
              *(f"rollout {x} own [deg]" for x in lengths),
              *(f"rollout {x} MuJoCo [deg]" for x in lengths)],
             [[r["data"], f"{r['own']:.4f}", f"{r['mujoco']:.4f}",
-              f"{r['mujoco'] / r['own']:.3f}" if r["own"] > 0 else "", *(f"{e:.3g}" for e in r["rollouts_own"]),
+              f"{r['mujoco'] / r['own']:.3f}" if r["own"] > 0 else "",
+              *(f"{e:.3g}" for e in r["rollouts_own"]),
               *(f"{e:.3g}" for e in r["rollouts_mujoco"])] for r in self.rows])
         return ["", "the identified model simulated, and written as MJCF for MuJoCo:", "",
                 table, "", columns_note(
