@@ -236,3 +236,21 @@ def test_mujoco_torques_refuses_other_actuators(rng):
     q = np.zeros((1, 2))
     with pytest.raises(ValueError, match="each driven by one actuator of fixed gain"):
         mujoco_torques(xml, q, q, q)
+
+
+def test_the_report_sets_the_choice_made_for_mujoco_beside(tmp_path, capsys):
+    """`identify --mjcf-out` with the friction left to the validation: the choice is
+    written and, beside it in the report, the choice among the terms MuJoCo holds, each
+    judged in MuJoCo."""
+    data = sj.load_kuka_lwr4(1).slice(0, 800).save(tmp_path / "m.npz")
+    out, js = tmp_path / "kuka.xml", tmp_path / "r.json"
+    assert cli.main(["identify", "--robot", "kuka_lwr4", "--data", str(data), "--method",
+                     "OLS", "--weights", "equal", "--validation", "phase", "--folds", "2",
+                     "--mjcf-out", str(out), "--json", str(js)]) == 0
+    assert "beside it, the choice among the terms MuJoCo holds" in capsys.readouterr().out
+    doc = json.loads(js.read_text())["mujoco"]
+    made = doc["made_for_mujoco"]
+    assert made["left_out"] == [] and made["friction"] in (
+        "viscous-coulomb", "viscous-coulomb+offset", "viscous-coulomb+offset+armature")
+    assert made["rows"][0]["mujoco"] == pytest.approx(made["rows"][0]["own"], rel=0.02)
+    assert doc["friction"] in out.read_text()

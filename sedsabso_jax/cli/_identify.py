@@ -151,8 +151,21 @@ def run(args: argparse.Namespace) -> None:
                                        held=dict(named_recordings(robot, held_out)),
                                        limits=limits, progress=progress)
         if args.mjcf_out is not None:
-            report = report.with_mjcf(limits=joint_limits(args.robot, robot),
-                                      timestep=1.0 / report.data.rate)
+            options = {"limits": joint_limits(args.robot, robot),
+                       "timestep": 1.0 / report.data.rate}
+            report = report.with_mjcf(**options)
+            held = held_frictions(frictions)
+            if not args.mujoco_terms and args.friction == AUTO and held != frictions:
+                # beside the choice, the one among the terms MuJoCo holds (not written)
+                made = chosen_and_identified(
+                    robot, data, _choice(argparse.Namespace(**{**vars(args),
+                                                                "mujoco_terms": True}),
+                                         True, len(held) * len(estimators)),
+                    candidate_models(robot, held, transmission=transmission,
+                                     recordings=models[0].recordings),
+                    estimators, held=dict(named_recordings(robot, held_out)),
+                    limits=limits)
+                report = report.beside_made_for_mujoco(made.with_mjcf(**options))
     paths = [os.path.abspath(p) for p in args.data]
     settings = {"robot": args.robot, "data": paths[0] if len(paths) == 1 else paths,
                 "validate": (None if not validate else os.path.abspath(validate[0])

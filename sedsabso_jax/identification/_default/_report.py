@@ -160,6 +160,16 @@ class IdentificationReport:
     #: (:meth:`with_mjcf`), or None
     simulator: SimulatorCheck | None = None
     mjcf: str | None = None
+    #: the same judgement of the choice made for MuJoCo (only the terms it holds), beside
+    #: a choice that has others (:meth:`beside_made_for_mujoco`), or None
+    made_for_mujoco: SimulatorCheck | None = None
+
+    def beside_made_for_mujoco(self, other: IdentificationReport) -> IdentificationReport:
+        """This report with ``other``'s MuJoCo judgement (the choice among the terms MuJoCo
+        holds, made :meth:`with_mjcf`) shown beside its own."""
+        if other.simulator is None:
+            raise ValueError("the report made for MuJoCo has no MJCF: make it with_mjcf()")
+        return dataclasses.replace(self, made_for_mujoco=other.simulator)
 
     def with_mjcf(self, **options) -> IdentificationReport:
         """This report with the identification written as MJCF
@@ -280,6 +290,10 @@ class IdentificationReport:
         lines += held_out_lines(self.validations, joints)
         if self.simulator is not None:
             lines += self.simulator.lines()
+        if self.made_for_mujoco is not None:
+            lines += self.made_for_mujoco.lines(
+                "beside it, the choice among the terms MuJoCo holds (`--mujoco-terms`, "
+                f"friction {self.made_for_mujoco.friction}), not written:")
         if self.limits is None:
             lines += ["", "NRMS over torque limits: no limits known for this robot"]
         return "\n".join(lines)
@@ -304,7 +318,9 @@ class IdentificationReport:
             else self.extrapolation.as_dict(),
             "rests": None if self.rests is None else self.rests.as_dict(),
             "validations": held_out_document(self.validations),
-            "mujoco": None if self.simulator is None else self.simulator.as_dict(),
+            "mujoco": None if self.simulator is None else {
+                **self.simulator.as_dict(), "made_for_mujoco": None
+                if self.made_for_mujoco is None else self.made_for_mujoco.as_dict()},
         })
 
     def figures(self) -> dict:

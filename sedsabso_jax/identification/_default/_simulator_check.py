@@ -23,6 +23,8 @@ class SimulatorCheck:
     lengths: tuple[float, ...]
     rows: tuple[dict, ...]
     left_out: tuple[str, ...]
+    #: the model's terms (its ``--friction`` text)
+    friction: str = ""
     #: each data set's :class:`~.._fit._rollouts.RolloutErrors` (its figure), by name
     rollouts: dict = dataclasses.field(default_factory=dict)
 
@@ -46,10 +48,12 @@ class SimulatorCheck:
                          "rollouts_own": medians["own"],
                          "rollouts_mujoco": medians["mujoco"]})
         return cls(measure, LENGTHS, tuple(rows),
-                   simulated(ident.model, ident.values).left_out, rollouts)
+                   simulated(ident.model, ident.values).left_out, ident.model.friction,
+                   rollouts)
 
-    def lines(self) -> list[str]:
-        """The report's section."""
+    def lines(self, title: str = "the identified model simulated, and written as MJCF "
+              "for MuJoCo:") -> list[str]:
+        """The report's section, under ``title``."""
         from ..._output import columns_note, markdown_table
 
         lengths = [f"{x:g} s" for x in self.lengths]
@@ -61,8 +65,7 @@ class SimulatorCheck:
               f"{r['mujoco'] / r['own']:.3f}" if r["own"] > 0 else "",
               *(f"{e:.3g}" for e in r["rollouts_own"]),
               *(f"{e:.3g}" for e in r["rollouts_mujoco"])] for r in self.rows])
-        return ["", "the identified model simulated, and written as MJCF for MuJoCo:", "",
-                table, "", columns_note(
+        return ["", title, "", table, "", columns_note(
                     ("own [%]", f"the package's model's torque error (`{self.measure}`)"),
                     ("MuJoCo [%]", "the written MJCF's, from MuJoCo's inverse dynamics "
                      "(`mj_inverse`)"),
@@ -77,5 +80,6 @@ class SimulatorCheck:
                 + ("; ".join(self.left_out) if self.left_out else "nothing")]
 
     def as_dict(self) -> dict:
-        return {"measure": self.measure, "rollout_lengths_s": list(self.lengths),
-                "left_out": list(self.left_out), "rows": list(self.rows)}
+        return {"measure": self.measure, "friction": self.friction,
+                "rollout_lengths_s": list(self.lengths), "left_out": list(self.left_out),
+                "rows": list(self.rows)}
