@@ -254,3 +254,11 @@ def test_the_report_sets_the_choice_made_for_mujoco_beside(tmp_path, capsys):
         "viscous-coulomb", "viscous-coulomb+offset", "viscous-coulomb+offset+armature")
     assert made["rows"][0]["mujoco"] == pytest.approx(made["rows"][0]["own"], rel=0.02)
     assert doc["friction"] in out.read_text()
+
+
+def test_mujoco_terms_refuses_a_friction_it_cannot_hold(tmp_path, capsys):
+    data = sj.load_kuka_lwr4(1).slice(0, 200).save(tmp_path / "m.npz")
+    assert cli.main(["identify", "--robot", "kuka_lwr4", "--data", str(data),
+                     "--friction", "viscous-coulomb+load", "--mujoco-terms"]) == 2
+    assert "--mujoco-terms: --friction viscous-coulomb+load has terms MuJoCo cannot " \
+        "hold" in capsys.readouterr().err

@@ -117,6 +117,10 @@ def run(args: argparse.Namespace) -> None:
     frictions = DEFAULT.frictions if args.friction == AUTO else (
         parse_friction(args.friction),)
     if args.mujoco_terms:
+        if args.friction != AUTO and held_frictions(frictions) != frictions:
+            raise ValueError(f"--mujoco-terms: --friction {args.friction} has terms MuJoCo "
+                             f"cannot hold in full; give only offset and armature beside "
+                             f"viscous-coulomb, or leave --friction auto")
         frictions = held_frictions(frictions)
     estimators = DEFAULT.estimator_candidates(None if args.method == AUTO else args.method,
                                               args.weights, runs=args.runs,
