@@ -184,7 +184,9 @@ def _clip_into_bounds(params):
 # --- residuals and errors ----------------------------------------------------------
 
 def inverse_torques(m: mujoco.MjModel, d: mujoco.MjData, q, qd, qdd) -> np.ndarray:
-    """The torques as measured (``ctrl``) that ``mj_inverse`` gives at the states."""
+    """The torques as measured (``ctrl``) that ``mj_inverse`` gives at the states, for a
+    compiled model the residual modifies in place (``sj.identification.mujoco_torques``
+    for an MJCF text)."""
     dof, _ = _joint_dofs(m)
     out = np.empty((len(q), m.nu))
     for k in range(len(q)):
@@ -256,8 +258,7 @@ def kinematic_rollout_errors(data, windows_s=(0.2, 0.5)) -> dict:
 
 
 def torque_nrms(xml_text: str, data, limits) -> float:
-    m = mujoco.MjModel.from_xml_string(xml_text)
-    tau = inverse_torques(m, mujoco.MjData(m), data.q, data.qd, data.qdd)
+    tau = sj.identification.mujoco_torques(xml_text, data.q, data.qd, data.qdd)
     return float(validation_metrics(data.tau, tau, limits).nrms_limits_percent)
 
 

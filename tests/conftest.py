@@ -3,9 +3,11 @@ pinocchio models built from the same descriptions (never from the package's own 
 
 from __future__ import annotations
 
+import importlib.metadata
 import json
 import os
 import zlib
+from pathlib import Path
 
 import jax
 import numpy as np
@@ -303,3 +305,29 @@ def random_mjcf(rng, n_movable: int, *, prismatic_prob=0.2, fixed_prob=0.3,
     parts += [f'<motor name="m{j}" joint="{j}" gear="1"/>' for j in joints]
     parts += ["</actuator>", "</mujoco>"]
     return "\n".join(parts)
+
+
+@pytest.fixture(scope="session")
+def robots_dir() -> Path:
+    """The robots of the ``example-robot-data`` package (the test extra): published URDFs."""
+    try:
+        dist = importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        pytest.skip("example-robot-data is not installed (the test extra)")
+    return Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
+
+
+def mj_torques(m, robot, q, qd, qdd):
+    """MuJoCo's ``qfrc_inverse`` (``mj_inverse`` of the compiled model ``m``) at the
+    chain's joints, rows of states; every joint off the chain at rest at ``qpos = 0``."""
+    import mujoco
+
+    ids = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j) for j in robot.joint_names]
+    qpos, dofs = m.jnt_qposadr[ids], m.jnt_dofadr[ids]
+    d, out = mujoco.MjData(m), []
+    for row in zip(q, qd, qdd):
+        d.qpos[:], d.qvel[:], d.qacc[:] = 0.0, 0.0, 0.0
+        d.qpos[qpos], d.qvel[dofs], d.qacc[dofs] = row
+        mujoco.mj_inverse(m, d)
+        out.append(d.qfrc_inverse[dofs].copy())
+    return np.array(out)

@@ -12,13 +12,11 @@ constraints off: it is checked as read (``Fc``), not against MuJoCo's torques.""
 
 from __future__ import annotations
 
-import importlib.metadata
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import random_mjcf
+from conftest import mj_torques, random_mjcf
 
 import sedsabso_jax as sj
 from sedsabso_jax.dynamics import MJCFError
@@ -33,19 +31,6 @@ def _model(path):
     m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
     return m
 
-
-def mj_torques(m, robot, q, qd, qdd):
-    """MuJoCo's ``qfrc_inverse`` at the chain's joints, rows of states; every joint off
-    the chain at rest at ``qpos = 0``."""
-    ids = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j) for j in robot.joint_names]
-    qpos, dofs = m.jnt_qposadr[ids], m.jnt_dofadr[ids]
-    d, out = mujoco.MjData(m), []
-    for row in zip(q, qd, qdd):
-        d.qpos[:], d.qvel[:], d.qacc[:] = 0.0, 0.0, 0.0
-        d.qpos[qpos], d.qvel[dofs], d.qacc[dofs] = row
-        mujoco.mj_inverse(m, d)
-        out.append(d.qfrc_inverse[dofs].copy())
-    return np.array(out)
 
 
 def states(rng, n, k=3):
@@ -236,14 +221,6 @@ ARMS = [
 #: every link kept as a body (fusestatic is on by default for URDF).
 MUJOCO_TAG = '<mujoco><compiler fusestatic="false" discardvisual="true"/></mujoco>'
 
-
-@pytest.fixture(scope="module")
-def robots_dir() -> Path:
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
-        pytest.skip("example-robot-data is not installed (the test extra)")
-    return Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
 
 
 @pytest.mark.parametrize("name,file,tip", ARMS, ids=[a[0] for a in ARMS])

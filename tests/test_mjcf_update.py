@@ -7,13 +7,11 @@ the new parameters back. Mismatched robots and non-physical parameters are refus
 
 from __future__ import annotations
 
-import importlib.metadata
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import random_inertial, random_mjcf
+from conftest import mj_torques, random_inertial, random_mjcf
 
 import sedsabso_jax as sj
 from sedsabso_jax.dynamics import update_mjcf
@@ -27,17 +25,6 @@ def _model(path):
     m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)  # frictionloss
     return m
 
-
-def mj_torques(m, robot, q, qd, qdd):
-    ids = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j) for j in robot.joint_names]
-    qpos, dofs = m.jnt_qposadr[ids], m.jnt_dofadr[ids]
-    d, out = mujoco.MjData(m), []
-    for row in zip(q, qd, qdd):
-        d.qpos[:], d.qvel[:], d.qacc[:] = 0.0, 0.0, 0.0
-        d.qpos[qpos], d.qvel[dofs], d.qacc[dofs] = row
-        mujoco.mj_inverse(m, d)
-        out.append(d.qfrc_inverse[dofs].copy())
-    return np.array(out)
 
 
 def assert_close(tau, expected, tol=TOL):
@@ -124,15 +111,10 @@ def _names(m, kind):
 MUJOCO_TAG = '<mujoco><compiler fusestatic="false" discardvisual="true"/></mujoco>'
 
 
-def test_panda_through_mujoco(tmp_path):
+def test_panda_through_mujoco(tmp_path, robots_dir):
     from lxml import etree
 
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
-        pytest.skip("example-robot-data is not installed (the test extra)")
-    robots = Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
-    root = etree.parse(str(robots / "panda_description/urdf/panda.urdf")).getroot()
+    root = etree.parse(str(robots_dir / "panda_description/urdf/panda.urdf")).getroot()
     for element in list(root.iter("visual", "collision")):
         element.getparent().remove(element)
     root.insert(0, etree.fromstring(MUJOCO_TAG))

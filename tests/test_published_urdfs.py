@@ -8,9 +8,7 @@ lower = upper = 0), is read unbounded, with one warning naming the latter."""
 
 from __future__ import annotations
 
-import importlib.metadata
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -46,14 +44,6 @@ ARMS = [
 ]
 NO_RANGE = "without a position range"
 
-
-@pytest.fixture(scope="module")
-def robots_dir() -> Path:
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
-        pytest.skip("example-robot-data is not installed (the test extra)")
-    return Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
 
 
 def _pin_state(model, joints, q, qd, qdd):

@@ -116,15 +116,20 @@ def joint_limits_from_urdf(path: PathLike, robot: Robot, *,
     no acceleration limit: ``qdd_max`` (scalar or ``(n,)``) is taken from the argument,
     ``inf`` by default. The joints are found by ``robot.joint_names``."""
     rows = joint_limit_rows(path, robot.joint_names)
+    return JointLimits(rows[:, 0], rows[:, 1], rows[:, 2], _accelerations(robot, qdd_max),
+                       rows[:, 3],
+                       names=robot.joint_names,
+                       angular=[t == "revolute" for t in robot.joint_types])
+
+
+def _accelerations(robot: Robot, qdd_max) -> np.ndarray:
+    """``qdd_max`` (None: ``inf``; a scalar or one per joint) as one per joint."""
     n = robot.n_joints
     qdd = np.full(n, np.inf) if qdd_max is None else np.asarray(qdd_max, dtype=float)
     if qdd.shape not in ((), (n,)):
         raise ValueError(f"qdd_max must be a scalar or have shape ({n},) for robot "
                          f"{robot.name!r}, got {qdd.shape}")
-    qdd = np.broadcast_to(qdd, (n,))
-    return JointLimits(rows[:, 0], rows[:, 1], rows[:, 2], qdd, rows[:, 3],
-                       names=robot.joint_names,
-                       angular=[t == "revolute" for t in robot.joint_types])
+    return np.broadcast_to(qdd, (n,))
 
 
 def joint_limits_from_mjcf(path: PathLike, robot: Robot, *,
@@ -138,12 +143,8 @@ def joint_limits_from_mjcf(path: PathLike, robot: Robot, *,
     ``(n,)``) is taken from the argument, ``inf`` by default. The joints are found by
     ``robot.joint_names``."""
     rows = mjcf_limit_rows(path, robot.joint_names)
-    n = robot.n_joints
-    qdd = np.full(n, np.inf) if qdd_max is None else np.asarray(qdd_max, dtype=float)
-    if qdd.shape not in ((), (n,)):
-        raise ValueError(f"qdd_max must be a scalar or have shape ({n},) for robot "
-                         f"{robot.name!r}, got {qdd.shape}")
-    return JointLimits(rows[:, 0], rows[:, 1], np.full(n, np.inf), np.broadcast_to(qdd, (n,)),
+    return JointLimits(rows[:, 0], rows[:, 1], np.full(robot.n_joints, np.inf),
+                       _accelerations(robot, qdd_max),
                        rows[:, 2], names=robot.joint_names,
                        angular=[t == "revolute" for t in robot.joint_types])
 
