@@ -14,9 +14,17 @@ import numpy as np
 import pytest
 from hypothesis import settings
 
+from sedsabso_jax.cli._main import _enable_compilation_cache
+
 # The package never turns on JAX's 64-bit mode itself (tests/test_global_state.py); the
 # tests, like its users, turn it on first.
 jax.config.update("jax_enable_x64", True)
+
+# Compiled XLA programs are kept between the run's processes and between runs, where the
+# command keeps its own (JAX's persistent cache: $SEDSABSO_JAX_CACHE, "off" disables it):
+# the xdist workers and the commands the tests start share what one of them compiled.
+if _enable_compilation_cache() is not None:
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.1)
 
 # Hypothesis draws the same examples on every run and keeps no example database, so a test
 # passes or fails the same way on every machine and in CI. HYPOTHESIS_PROFILE=explore draws

@@ -22,8 +22,9 @@ metrics averaged over recordings (``mean_metrics``), and the identified model in
 simulator: what MuJoCo holds of each term and of a model (``InSimulator``,
 ``Simulated``, ``simulated``; the candidates it holds in full, ``held_frictions``), its
 torques there (``mujoco_torques``), open-loop rollouts in JAX and in MuJoCo
-(``rollout_errors``, ``RolloutErrors``) and the report's check of both
-(``SimulatorCheck``). Builds on :mod:`sedsabso_jax.dynamics`, :mod:`sedsabso_jax.optim`
+(``rollout_errors``, ``RolloutErrors``), the report's check of both
+(``SimulatorCheck``) and the refinement by simulation error (``refine``, ``OutputError``,
+``Refined``). Builds on :mod:`sedsabso_jax.dynamics`, :mod:`sedsabso_jax.optim`
 and :mod:`sedsabso_jax.measurements`.
 
 The sub-packages answer one question each: ``_model`` (what torque a model predicts: its
@@ -52,6 +53,9 @@ from ._estimators._least_squares import AbstractLeastSquares as AbstractLeastSqu
 from ._fit._fit import SETTLE_RTOL as SETTLE_RTOL
 from ._fit._fit import Fitted as Fitted
 from ._fit._projection import Projection as Projection
+from ._fit._output_error import OutputError as OutputError
+from ._fit._output_error import Refined as Refined
+from ._fit._output_error import refine as refine
 from ._fit._rollouts import RolloutErrors as RolloutErrors
 from ._fit._rollouts import rollout_errors as rollout_errors
 from ._fit._simulator import Simulated as Simulated
@@ -117,5 +121,5 @@ __all__ = [
     "AbstractGainMethod", "LikelihoodGains", "TotalGains", "OrdinaryGains", "PhysicalGains",
     "CALIBRATED_STD", "KeptTerms", "KEPT_TERMS", "rests", "Rests", "HeldOut", "mean_metrics",
     "InSimulator", "Simulated", "simulated", "held_frictions", "mujoco_torques",
-    "SimulatorCheck", "rollout_errors", "RolloutErrors",
+    "SimulatorCheck", "rollout_errors", "RolloutErrors", "OutputError", "Refined", "refine",
 ]

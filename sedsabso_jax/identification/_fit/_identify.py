@@ -94,6 +94,13 @@ class Identification:
         """Predicted torques ``(..., n)`` for states ``(..., n)``."""
         return self.model.predict(self.values, q, qd, qdd)
 
+    def dynamics(self) -> tuple[Robot, np.ndarray, np.ndarray, Any]:
+        """``(robot, params, armature, extra)`` of a physical fit as a simulator holds it,
+        for :func:`~sedsabso_jax.dynamics.rollout` (:func:`~._rollouts.simulated_dynamics`)."""
+        from ._rollouts import simulated_dynamics
+
+        return simulated_dynamics(self)
+
     def urdf(self, source: str | os.PathLike[str] | None = None) -> str:
         """The robot's URDF with the identified link parameters and joint friction (a
         physical fit only: a simulator needs real bodies): ``source``, the URDF the robot

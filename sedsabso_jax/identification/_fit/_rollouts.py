@@ -132,7 +132,7 @@ class RolloutErrors:
 
 def rollout_errors(ident, data, xml: str | None = None, lengths=LENGTHS,
                    count: int = WINDOWS) -> RolloutErrors:
-    """Open-loop rollouts of a physical fit ``ident`` from ``count`` measured states of
+    """Open-loop rollouts of a physical fit ``ident`` (or a :class:`~._output_error.Refined`) from ``count`` measured states of
     ``data`` (a :class:`~sedsabso_jax.Measurements`), driven by its measured torques held
     over each sample period, for the longest of ``lengths`` (s); each length's error is
     the rollout's at that time: in JAX (linearly implicit Euler, steps of at most
@@ -146,7 +146,7 @@ def rollout_errors(ident, data, xml: str | None = None, lengths=LENGTHS,
     first = starts(data.n_samples, max(steps), count)
     index = first[:, None] + np.arange(max(steps) + 1)
     q, qd, tau = (np.asarray(a, dtype=float) for a in (data.q, data.qd, data.tau))
-    robot, params, armature, extra = simulated_dynamics(ident)
+    robot, params, armature, extra = ident.dynamics()
     own, _ = rollout(robot, params, q[first], qd[first], tau[index[:, :-1]], dt,
                      armature=armature, extra=extra, integrator="implicit",
                      substeps=max(1, int(np.ceil(dt / LONGEST_STEP - 1e-9))))
