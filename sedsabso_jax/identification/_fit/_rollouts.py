@@ -33,7 +33,8 @@ class ModelTorque(eqx.Module):
     """The torques an identified model adds to its rigid body as a function of the state:
     its Coulomb friction ``fc`` in the model's own shape (a smooth Coulomb's ``tanh``, else
     ``sign``, regularised as ``tanh(qd /`` :data:`STICKING_VELOCITY` ``)`` so that a joint
-    sticks as its friction makes it) and its torque offsets (``extra`` of :func:`~sedsabso_jax.dynamics.rollout`)."""
+    sticks as its friction makes it) and its torque offsets (``extra`` of
+    :func:`~sedsabso_jax.dynamics.rollout`)."""
 
     fc: Array
     offset: Array
@@ -132,13 +133,13 @@ class RolloutErrors:
 
 def rollout_errors(ident, data, xml: str | None = None, lengths=LENGTHS,
                    count: int = WINDOWS) -> RolloutErrors:
-    """Open-loop rollouts of a physical fit ``ident`` (or a :class:`~._output_error.Refined`) from ``count`` measured states of
-    ``data`` (a :class:`~sedsabso_jax.Measurements`), driven by its measured torques held
-    over each sample period, for the longest of ``lengths`` (s); each length's error is
-    the rollout's at that time: in JAX (linearly implicit Euler, steps of at most
-    :data:`LONGEST_STEP`), and
-    in MuJoCo when the MJCF ``xml`` is given (its own integrator; its timestep must be the
-    sample period)."""
+    """Open-loop rollouts of a physical fit ``ident`` (or a
+    :class:`~._output_error.Refined`: anything with ``dynamics()``) from ``count``
+    measured states of ``data`` (a :class:`~sedsabso_jax.Measurements`), driven by its
+    measured torques held over each sample period, for the longest of ``lengths`` (s);
+    each length's error is the rollout's at that time: in JAX (linearly implicit Euler,
+    steps of at most :data:`LONGEST_STEP`), and in MuJoCo when the MJCF ``xml`` is given
+    (its own integrator; its timestep must be the sample period)."""
     dt = 1.0 / float(data.rate)
     steps = [int(round(length / dt)) for length in lengths]
     if min(steps) < 1:
