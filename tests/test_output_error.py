@@ -123,3 +123,13 @@ def test_refine_rejects_bad_options(plant):
     ols = sj.identify(robot, train)
     with pytest.raises(ValueError, match="physically consistent"):
         refine(ols, train)
+
+
+def test_the_mjcf_names_the_refinement_and_what_mujoco_cannot_hold(plant, refined):
+    pytest.importorskip("mujoco")
+    robot, (train, _), fit = plant
+    xml = refined.mjcf()
+    assert "refined by simulation error (8 windows of 0.2 s" in xml
+    assert "every part of the refined model is held" in xml
+    smooth = dataclasses.replace(refined, model=sj.TorqueModel.of(robot, (sj.SmoothCoulomb(),)))
+    assert "the Coulomb friction's smooth shape" in smooth.mjcf()

@@ -148,10 +148,19 @@ class Refined:
 
     def mjcf(self, **options: Any) -> str:
         """The refined model as MJCF (:func:`~sedsabso_jax.dynamics.to_mjcf`, its
-        ``limits``, ``timestep``, ``integrator``, ``comment`` as ``options``)."""
+        ``limits``, ``timestep``, ``integrator``, ``comment`` as ``options``); the
+        default comment names the refinement and what MuJoCo cannot hold of it (a smooth
+        Coulomb shape)."""
         from ...dynamics._mjcf_writer import to_mjcf
 
-        comment = options.pop("comment", f"refined by simulation error ({self.method})")
+        m = self.method
+        _, reshaped = self.model.coulomb(np.ones(self.robot.n_joints))
+        comment = options.pop("comment", (
+            f"refined by simulation error ({m.windows} windows of {m.length} s, torque "
+            f"weight {m.torque_weight:g}, {self.steps} steps); "
+            + ("not held by the simulator (left out): the Coulomb friction's smooth shape "
+               "(frictionloss is its level)" if reshaped else
+               "every part of the refined model is held")))
         return to_mjcf(self.robot, self.params, armature=self.armature, offset=self.offset,
                        comment=comment, **options)
 
