@@ -118,6 +118,8 @@ def test_refine_rejects_bad_options(plant):
         refine(fit, train, OutputError(torque_weight=1.0))
     with pytest.raises(TypeError, match="OutputError"):
         refine(fit, train, "lm")
+    with pytest.raises(ValueError, match="limits must be positive"):
+        refine(fit, train, OutputError(torque_weight=1.0), limits=[1.0, 2.0])
     with pytest.raises(TypeError, match="one Measurements"):
         refine(fit, [train, train])
     ols = sj.identify(robot, train)

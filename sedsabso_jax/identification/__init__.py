@@ -52,10 +52,10 @@ from ._estimators._estimator import weigh as weigh
 from ._estimators._least_squares import AbstractLeastSquares as AbstractLeastSquares
 from ._fit._fit import SETTLE_RTOL as SETTLE_RTOL
 from ._fit._fit import Fitted as Fitted
-from ._fit._projection import Projection as Projection
 from ._fit._output_error import OutputError as OutputError
 from ._fit._output_error import Refined as Refined
 from ._fit._output_error import refine as refine
+from ._fit._projection import Projection as Projection
 from ._fit._rollouts import RolloutErrors as RolloutErrors
 from ._fit._rollouts import rollout_errors as rollout_errors
 from ._fit._simulator import Simulated as Simulated

@@ -62,7 +62,7 @@ class PhysicalFit:
     report: dict
 
 
-def _inertial_params(J):
+def inertial_params(J):
     """A link's 10 parameters ``[Ixx Iyy Izz Ixy Ixz Iyz m mx my mz]`` as affine cvxpy
     expressions of its pseudo-inertia ``J`` (the inverse of ``pseudo_inertia``:
     ``I = tr(S) 1 - S`` with ``S`` the upper-left 3x3 block)."""
@@ -91,7 +91,7 @@ def _programme(n_joints: int, dim: int, n_extra: int, nonneg: tuple[int, ...],
     friction = cp.Variable(2 * n_joints, name="friction")  # (Fc_i, Fv_i) per joint
     extras = cp.Variable(n_extra, name="extras") if n_extra else None
     p = cp.hstack([e for i in range(n_joints)
-                   for e in (*_inertial_params(J[i]), friction[2 * i], friction[2 * i + 1])])
+                   for e in (*inertial_params(J[i]), friction[2 * i], friction[2 * i + 1])])
     pe = cp.hstack([p, extras]) if extras is not None else p
     # the square root of the objective (same minimiser) as one second-order cone: the
     # solver's tolerance then applies to the residual norm, not to its square
@@ -103,7 +103,7 @@ def _programme(n_joints: int, dim: int, n_extra: int, nonneg: tuple[int, ...],
         assert extras is not None  # a body is extra columns
         B = cp.Variable((4, 4), symmetric=True, name=f"body{k + 1}")
         constraints += [B - PSD_MARGIN * np.eye(4) >> 0,
-                        extras[start:start + 10] == cp.hstack(_inertial_params(B))]
+                        extras[start:start + 10] == cp.hstack(inertial_params(B))]
     problem = cp.Problem(cp.Minimize(objective), constraints)
     parameters = {"M": M, "c": c, "root_lam": root_lam, "pulled": pulled}
     for v in parameters.values():
@@ -168,7 +168,7 @@ def _bodies_programme(dim: int, rank: int, nonneg: tuple[int, ...], bodies: tupl
     for k, start in enumerate(bodies):
         B = cp.Variable((4, 4), symmetric=True, name=f"body{k + 1}")
         constraints += [B - PSD_MARGIN * np.eye(4) >> 0,
-                        extras[start:start + 10] == cp.hstack(_inertial_params(B))]
+                        extras[start:start + 10] == cp.hstack(inertial_params(B))]
     problem = cp.Problem(cp.Minimize(cp.norm(cp.hstack([M @ x - c, root_ridge * x - pulled]),
                                              2)), constraints)
     parameters = {"M": M, "c": c, "root_ridge": root_ridge, "pulled": pulled}
