@@ -22,9 +22,13 @@ jax.config.update("jax_enable_x64", True)
 
 # Compiled XLA programs are kept between the run's processes and between runs, where the
 # command keeps its own (JAX's persistent cache: $SEDSABSO_JAX_CACHE, "off" disables it):
-# the xdist workers and the commands the tests start share what one of them compiled.
-if _enable_compilation_cache() is not None:
+# the xdist workers, the commands the tests start and the Python processes they start (JAX
+# reads the two settings from the environment) share what one of them compiled.
+CACHE_DIR = _enable_compilation_cache()
+if CACHE_DIR is not None:
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.1)
+    os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", CACHE_DIR)
+    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.1")
 
 # Hypothesis draws the same examples on every run and keeps no example database, so a test
 # passes or fails the same way on every machine and in CI. HYPOTHESIS_PROFILE=explore draws
@@ -236,16 +240,66 @@ SMALL_CAMPAIGN = ["compare", "--suite", "bbob", "--functions", "1,21", "--dimens
                   "--algorithms", "LDWPSO,CMA_ES", "--budget", "100d"]
 
 
+def once_per_run(tmp_path_factory, worker_id: str, name: str, make) -> Path:
+    """The directory ``name`` that ``make(directory)`` filled, once in this run for all
+    xdist workers: the first worker to ask makes it, the others wait for it (a file lock in
+    the run's temporary directory, which the workers share)."""
+    from filelock import FileLock
+
+    base = tmp_path_factory.getbasetemp()
+    shared = base.parent if worker_id != "master" else base  # the run's, not older runs'
+    out, done = shared / name, shared / f"{name}.done"
+    with FileLock(str(shared / f"{name}.lock")):
+        if not done.is_file():
+            out.mkdir(exist_ok=True)
+            make(out)
+            done.touch()
+    return out
+
+
+#: The KUKA's default identification on its two shipped runs, as the docs quote it
+#: (tests/test_docs.py) and the command's end-to-end test reads it (test_identify_cli.py).
+KUKA_IDENTIFY = ("sedsabso-jax identify --robot kuka_lwr4 --data "
+                 "sedsabso_jax/data/kuka_lwr4/measurements_1.npz --validate "
+                 "sedsabso_jax/data/kuka_lwr4/measurements_2.npz")
+
+
 @pytest.fixture(scope="session")
-def small_campaign(tmp_path_factory):
-    """:data:`SMALL_CAMPAIGN` run by the command in this process: ``(its --out, the task
+def kuka_identified(tmp_path_factory, worker_id) -> tuple[dict, str, Path]:
+    """:data:`KUKA_IDENTIFY` run by the command from the repository root, once in a run:
+    ``(the JSON report, what it printed, its --out)``."""
+    import contextlib
+    import io
+    import shlex
+
+    from sedsabso_jax import cli
+
+    def make(out: Path) -> None:
+        argv = [*shlex.split(KUKA_IDENTIFY)[1:], "--out", str(out / "results"), "--json",
+                str(out / "report.json")]
+        printed = io.StringIO()
+        with contextlib.chdir(Path(__file__).resolve().parents[1]), \
+                contextlib.redirect_stdout(printed):
+            assert cli.main(argv) == 0
+        (out / "printed.txt").write_text(printed.getvalue(), encoding="utf-8")
+
+    out = once_per_run(tmp_path_factory, worker_id, "kuka-identified", make)
+    return (json.loads((out / "report.json").read_text(encoding="utf-8")),
+            (out / "printed.txt").read_text(encoding="utf-8"), out / "results")
+
+
+@pytest.fixture(scope="session")
+def small_campaign(tmp_path_factory, worker_id):
+    """:data:`SMALL_CAMPAIGN` run by the command, once in a run: ``(its --out, the task
     documents, summary.json)``."""
     pytest.importorskip("cocoex")
     pytest.importorskip("evosax")
     from sedsabso_jax import cli
 
-    out = tmp_path_factory.mktemp("campaign") / "serial"
-    assert cli.main([*SMALL_CAMPAIGN, "--out", str(out)]) == 0
+    def make(campaign: Path) -> None:
+        assert cli.main([*SMALL_CAMPAIGN, "--out", str(campaign / "serial")]) == 0
+
+    out = once_per_run(tmp_path_factory, worker_id, "campaign", make) / "serial"
     docs = [json.loads(p.read_text()) for p in sorted((out / "tasks").rglob("*.json"))]
     return out, docs, json.loads((out / "summary.json").read_text())
 

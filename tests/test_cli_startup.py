@@ -153,6 +153,8 @@ def test_the_flags_words_are_the_librarys():
                                               for t in ident.FRICTION_CANDIDATES)
     assert words.PRIOR_STRENGTHS == ident.PRIOR_STRENGTHS
     assert words.AUTO == ident.Default.auto
+    assert (words.FOLDS, words.FIT_BELOW, words.PREDICT_ABOVE) == (
+        ident.DEFAULT.folds, ident.DEFAULT.fit_below, ident.DEFAULT.predict_above)
     assert words.GAIN_METHODS == tuple(ident.GAIN_METHODS)
     assert words.DEFAULT_GAIN_METHOD == DEFAULT_METHOD.name
     assert words.COMPARE_ALGORITHMS == DEFAULT_ALGORITHMS

@@ -28,7 +28,6 @@ import ast
 import contextlib
 import importlib
 import io
-import json
 import linecache
 import os
 import re
@@ -40,6 +39,7 @@ import zlib
 from pathlib import Path
 
 import pytest
+from conftest import KUKA_IDENTIFY
 from test_layout import NAMESPACES  # the public namespaces, each with its __all__
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -273,10 +273,6 @@ def test_examples_run(path, tmp_path, monkeypatch):
 
 
 # ----------------------------------------------------------- the numbers the pages quote
-#: The KUKA's default identification on its two shipped runs, as the pages give it.
-KUKA_IDENTIFY = ("sedsabso-jax identify --robot kuka_lwr4 --data "
-                 "sedsabso_jax/data/kuka_lwr4/measurements_1.npz --validate "
-                 "sedsabso_jax/data/kuka_lwr4/measurements_2.npz")
 NUMBER = r"(\d+\.\d+)"
 #: Numbers quoted in the pages: (page under docs/, a pattern of the page's text with its
 #: line breaks read as spaces, its group the number, where the number comes from). From
@@ -306,15 +302,9 @@ QUOTED = [
 
 
 @pytest.fixture(scope="module")
-def kuka_report(tmp_path_factory) -> dict:
+def kuka_report(kuka_identified) -> dict:
     """The JSON report of :data:`KUKA_IDENTIFY`, run from the repository root."""
-    from sedsabso_jax import cli
-
-    path = tmp_path_factory.mktemp("kuka") / "report.json"
-    argv = [*shlex.split(KUKA_IDENTIFY)[1:], "--out", str(path.parent), "--json", str(path)]
-    with contextlib.chdir(ROOT), contextlib.redirect_stdout(io.StringIO()):
-        assert cli.main(argv) == 0
-    return json.loads(path.read_text(encoding="utf-8"))
+    return kuka_identified[0]
 
 
 def _printed(page: Path, text: str) -> str:

@@ -99,18 +99,18 @@ def test_the_associative_scan_is_the_sequential_one(plant):
     np.testing.assert_array_equal(a[start], 0.0)
 
 
-def test_a_subset_reads_the_state_of_the_whole_recording(plant):
+def test_a_split_reads_the_state_of_the_whole_recording(plant):
     """Cross-validation's training and test samples: their rows (and predictions) are
-    the whole recording's, taken; a subset of a subset too."""
+    the whole recording's, taken; a split of a split too."""
     robot, base, data, _ = plant
     model = sj.TorqueModel.of(robot, (sj.Presliding(0.02),), base=base)
     samples = Samples(data.q, data.qd, data.qdd, data.tau)
     whole = samples.rows(model)
     keep = np.arange(len(data.q)) % 3 != 0
-    part = samples.subset(keep)
+    part = samples.split(keep)
     np.testing.assert_array_equal(part.rows(model), whole[keep])
     inner = np.arange(keep.sum()) % 2 == 0
-    np.testing.assert_array_equal(part.subset(inner).rows(model), whole[keep][inner])
+    np.testing.assert_array_equal(part.split(inner).rows(model), whole[keep][inner])
     values = np.random.default_rng(0).standard_normal(model.dim)
     np.testing.assert_allclose(part.predict(model, values), whole[keep] @ values)
 
@@ -175,9 +175,8 @@ class SharedDrag(sj.identification.AbstractScale):
         return dataclasses.replace(self, velocity=float(values[0]))
 
     def columns(self, model, s):
-        xp = s.xp
-        return xp.sum(xp.tanh(s.qd / self.per_joint(model.robot.n_joints, xp)), -1,
-                      keepdims=True)[..., None, :] * xp.ones((model.robot.n_joints, 1))
+        return jnp.sum(jnp.tanh(s.qd / self.per_joint(model.robot.n_joints)), -1,
+                       keepdims=True)[..., None, :] * jnp.ones((model.robot.n_joints, 1))
 
 
 MODELS = {"presliding:fit": lambda: parse_friction("presliding:fit"),
@@ -208,7 +207,7 @@ def test_the_search_problem_is_the_least_squares_fit(plant, friction):
     assert float(loss(problem, jnp.asarray(u))) == pytest.approx(
         _least_squares_loss(Y, data.tau, w), rel=1e-7)
     keep = np.arange(len(data.q)) % 4 != 1
-    part = Projection.of(model, samples.subset(keep), w)
+    part = Projection.of(model, samples.split(keep), w)
     assert float(loss(part, jnp.asarray(u))) == pytest.approx(
         _least_squares_loss(Y[keep], data.tau[keep], w), rel=1e-7)
     # the split as a mask over the whole recordings, or its indices: the same problem
@@ -217,12 +216,13 @@ def test_the_search_problem_is_the_least_squares_fit(plant, friction):
         np.testing.assert_array_equal(masked.mask, part.mask)
         assert float(loss(masked, jnp.asarray(u))) == float(loss(part, jnp.asarray(u)))
     population = jnp.asarray(u + np.random.default_rng(0).normal(0, 0.5, (5, k)))
-    np.testing.assert_allclose(eqx.filter_jit(jax.vmap(problem.loss))(population),
+    losses = eqx.filter_jit(lambda u: jax.vmap(problem.loss)(u))  # jit of a closure
+    np.testing.assert_allclose(losses(population),
                                [loss(problem, p) for p in population], rtol=1e-9)
     r = residual(jnp.asarray(u))
     assert float(jnp.mean(r ** 2)) == pytest.approx(float(loss(problem, jnp.asarray(u))),
                                                     rel=1e-7)
-    J = eqx.filter_jit(jax.jacfwd(residual))(jnp.asarray(u))
+    J = eqx.filter_jit(lambda u: jax.jacfwd(residual)(u))(jnp.asarray(u))
     h = 1e-5
     e = np.eye(k)[k - 1]
     fd = (residual(jnp.asarray(u + h * e)) - residual(jnp.asarray(u - h * e))) / (2 * h)

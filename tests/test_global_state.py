@@ -6,6 +6,7 @@ fresh interpreter: this test process turned the mode on (conftest.py)."""
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import textwrap
@@ -18,10 +19,15 @@ import sedsabso_jax.reproduce._experiment, sedsabso_jax.reproduce._report
 """
 
 
-def _run(code: str) -> subprocess.CompletedProcess:
+def _run(code: str, cache: bool = False) -> subprocess.CompletedProcess:
+    """``code`` in a fresh Python with a bare environment; ``cache``: keeping compiled
+    programs where the tests do (conftest), for a check that is not about JAX's settings."""
+    env = {"JAX_PLATFORMS": "cpu", "PATH": "/usr/bin:/bin"}
+    if cache:
+        env |= {k: v for k, v in os.environ.items() if k in (
+            "JAX_COMPILATION_CACHE_DIR", "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS")}
     return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
-                          text=True, timeout=300, env={"JAX_PLATFORMS": "cpu",
-                                                      "PATH": "/usr/bin:/bin"})
+                          text=True, timeout=300, env=env)
 
 
 def test_import_changes_no_jax_configuration_nor_evosax_dtypes():
@@ -91,6 +97,6 @@ def test_optimisers_run_in_float32_when_x64_is_off():
                 assert r.x.dtype == jnp.float32 and r.f.dtype == jnp.float32, r
                 assert float(r.f) < float(r.history_f[0]) or float(r.f) == 0.0
         print("float32 ok", jax.config.jax_enable_x64)
-    """)
+    """, cache=True)
     assert run.returncode == 0, run.stderr[-2000:]
     assert "float32 ok False" in run.stdout

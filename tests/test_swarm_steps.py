@@ -360,3 +360,25 @@ def test_population_is_eq_15_16_in_a_run(K):
                     np.ones(2), key=jax.random.key(0), iterations=K)
     np.testing.assert_array_equal(np.asarray(r.history_n), expected)
     assert expected[0] == 67 and expected[-1] == 37
+
+
+def test_a_swarm_defined_later_is_named_in_swarms():
+    """A swarm that gives ``paper()`` registers itself when its class is defined, after the
+    package was imported too: ``sj.optim.SWARMS`` and the names the package resolves
+    (:func:`~sedsabso_jax.optim._registry.paper_solver`) read the registry when asked."""
+    from sedsabso_jax.optim._registry import paper_solver
+    from sedsabso_jax.optim._swarm import REGISTERED
+
+    assert list(sj.optim.SWARMS)[:3] == ["SEDSABSO", "BSO", "LDWPSO"]
+
+    class SlowPSO(sj.LDWPSO):
+        @classmethod
+        def paper(cls):
+            return cls(population_size=7)
+
+    try:
+        assert "SlowPSO" in sj.optim.SWARMS and sj.optim.SWARMS["SlowPSO"] is SlowPSO
+        assert paper_solver("SlowPSO").population_size == 7
+    finally:
+        del REGISTERED["SlowPSO"]
+    assert "SlowPSO" not in sj.optim.SWARMS

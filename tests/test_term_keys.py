@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import ClassVar
 
+import jax.numpy as jnp
 import numpy as np
 
 import sedsabso_jax as sj
@@ -24,8 +25,7 @@ class Power(AbstractTerm):
         return tuple(f"FP{j + 1}" for j in range(model.robot.n_joints))
 
     def columns(self, model, s):
-        xp = s.xp
-        return diagonal(s.qd * xp.abs(s.qd) ** (self.power - 1), model.robot.n_joints, xp)
+        return diagonal(s.qd * jnp.abs(s.qd) ** (self.power - 1), model.robot.n_joints)
 
     def settings(self):
         return {}

@@ -108,7 +108,7 @@ def subset_problems(model, data, limits, masks):
     rows it leaves out)."""
     samples = Samples(data.q, data.qd, data.qdd, data.tau)
     samples.rows(model)
-    return [samples.subset(mask).problem(model, limits) for mask in masks]
+    return [samples.split(mask).problem(model, limits) for mask in masks]
 
 
 @pytest.mark.parametrize("sigma", [None, "residual", "limits"])

@@ -268,8 +268,8 @@ BUGS = [
      "    return np.where(free | (norms == 0), np.inf, np.sqrt(var))",
      "    return np.sqrt(var)", "undetermined scales reported with a finite std", FRICTION, None),
     ("identification/_validation/_cross_validation.py",
-     "samples.subset(test).predict(fitted.model, fitted.fit.x)",
-     "samples.subset(test).predict(model, fitted.fit.x)", "a split predicted by the model "
+     "samples.split(test).predict(fitted.model, fitted.fit.x)",
+     "samples.split(test).predict(model, fitted.fit.x)", "a split predicted by the model "
      "as given, not as its fit left it (scales, load point)", FRICTION, None),
     ("identification/_model/_dahl.py", "z = s + (z - s) * jnp.exp(-jnp.abs(d) / q_c)",
      "z = s + (z - s) * jnp.exp(-(jnp.abs(d) + 1e-4) / q_c)",
@@ -279,10 +279,11 @@ BUGS = [
     ("identification/_model/_term.py",
      "        source = self if self.whole is None else self.whole\n",
      "        source = self\n",
-     "a subset's presliding state integrated on the subset alone", STATE, None),
+     "a split's presliding state integrated on the split alone", STATE, None),
     ("identification/_fit/_samples.py",
-     "whole_index = index if self.keep is None else np.asarray(self.keep)[index]",
-     "whole_index = index", "a subset of a subset indexes the whole samples wrongly", STATE,
+     "mask[np.flatnonzero(self.mask)[inner]] = True",
+     "mask[np.flatnonzero(inner)] = True", "a split of a split indexes the whole samples "
+     "wrongly", STATE,
      None),
     ("identification/_model/_dahl.py", "        s = jnp.sign(d)\n",
      "        s = jnp.sign(d) * 0.9\n", "the presliding state saturates below 1", STATE, None),

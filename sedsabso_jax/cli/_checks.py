@@ -12,6 +12,8 @@ import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from . import _vocabulary as words
+
 if TYPE_CHECKING:
     from ..dynamics._robot import Robot
     from ..measurements._container import Measurements
@@ -33,7 +35,7 @@ def refuse_contradictions(args: argparse.Namespace) -> None:
     if args.folds == 0 and args.validation != "pooled":
         raise ValueError(f"--folds 0 turns validation off: --validation {args.validation} "
                          f"would not be used")
-    if args.folds not in (0, 5) and args.validation in ("speed", "recordings"):
+    if args.folds not in (0, words.FOLDS) and args.validation in ("speed", "recordings"):
         raise ValueError(f"--folds {args.folds} sets the folds of the motion's phase, which "
                          f"--validation {args.validation} does not use")
     given = [f"--{k}" for k, default in SWARM_FLAGS.items() if getattr(args, k) != default]

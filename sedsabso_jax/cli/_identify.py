@@ -10,6 +10,7 @@ import math
 import os
 from typing import Any
 
+from . import _vocabulary as words
 from ._checks import (
     check_signals,
     inputs_of,
@@ -253,11 +254,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      help="what chooses what is auto and predicts the error on new motions: "
                      "pooled (default): the phase folds (or, for several --data files, "
                      "leave one out) and the speed splits together; speed: for each joint, "
-                     "fit where it moves below 0.7 of its peak speed and predict above 0.8; "
+                     f"fit where it moves below {words.FIT_BELOW:g} of its peak speed and predict "
+                     f"above {words.PREDICT_ABOVE:g}; "
                      "phase: folds of the motion's phase; recordings: leave one --data file "
                      "out")
-    val.add_argument("--folds", metavar="K", type=non_negative_int, default=5,
-                     help="folds over the motion's phase (5); 0: no validation at all")
+    val.add_argument("--folds", metavar="K", type=non_negative_int, default=words.FOLDS,
+                     help=f"folds over the motion's phase ({words.FOLDS}); 0: no validation "
+                     "at all")
     val.add_argument("--offset-per-recording", action="store_true",
                      help="one torque offset per joint and --data file (a sensor zero that "
                      "moved between them); new motions get their mean")

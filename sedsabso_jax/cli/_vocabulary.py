@@ -19,6 +19,11 @@ FRICTION_CANDIDATES = ("viscous-coulomb+smooth", "viscous-coulomb+offset+smooth"
                        "viscous-coulomb+offset+armature+smooth",
                        "viscous-coulomb+offset+smooth+load",
                        "viscous-coulomb+offset+armature+smooth+load")
+#: ``identification.DEFAULT``'s folds of the motion's phase, and its speed split: fit where
+#: a joint moves below ``FIT_BELOW`` of its peak speed, predict above ``PREDICT_ABOVE``.
+FOLDS = 5
+FIT_BELOW = 0.7
+PREDICT_ABOVE = 0.8
 #: ``identification.PRIOR_STRENGTHS``: what ``--prior-strength cv`` chooses from.
 PRIOR_STRENGTHS = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)
 #: ``identification.GAIN_METHODS``' names, and the default method's.

@@ -324,9 +324,9 @@ def _antenna_terms(R, G, a):
 
 def _row_sum(A):
     """Sum over the last (long) axis. On the CPU as a product with ones, faster there
-    inside the swarms' loops than XLA's row reduction; elsewhere a plain reduction, which fuses with the ``abs`` that feeds
-    it (a product would be a separate BLAS call, and on a GPU its float32 default
-    precision is TF32)."""
+    inside the swarms' loops than XLA's row reduction; elsewhere a plain reduction, which
+    fuses with the ``abs`` that feeds it (a product would be a separate BLAS call, and on
+    a GPU its float32 default precision is TF32)."""
     if jax.default_backend() == "cpu":
         return jnp.matmul(A, jnp.ones(A.shape[-1], A.dtype), precision=HIGHEST)
     return jnp.sum(A, -1)

@@ -237,7 +237,7 @@ class IdentificationReport:
                       "ignores the constraints and the prior of a physical fit; `inf`: not "
                       "determined by the data)"),
                      ("relative std [%]", "100 std / |value|")),
-                 *stage_lines(ident.settings),
+                 *stage_lines(ident.settings, ident.model.terms),
                  "", "fit (identification data):", "", metrics_table(self.fit, joints), "",
                  METRICS_NOTE]
         if self.cross_validation is not None:

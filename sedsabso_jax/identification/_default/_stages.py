@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 
-def stage_lines(settings: dict) -> list[str]:
+from .._model._term import AbstractTerm
+
+
+def stage_lines(settings: dict, terms: Sequence[AbstractTerm]) -> list[str]:
     """What the fit's stages did (:mod:`~.._fit._fit`): the nonlinear parameters it
     searched (value, standard deviation, unit, on a bound, not determined; the method and
-    its trials, or that they were held at the values given) and where the load of
-    friction growing with it came from."""
+    its trials, or that they were held at the values given) and what its ``terms`` read
+    of the fit (each term's :meth:`~.._model._term.AbstractTerm.read_line`)."""
     lines = []
     searched = settings.get("searched") or {}
     if searched:
@@ -21,13 +25,6 @@ def stage_lines(settings: dict) -> list[str]:
         how = (f"searched ({searched['method']}, {searched['evaluations']} trials)"
                if searched["evaluations"] else f"{searched['method']}, not searched")
         lines.append(f"nonlinear parameters {how}: {found}")
-    load = settings.get("load")
-    if load:
-        if "settled" in load:
-            state = "settled" if load["settled"] else "NOT settled"
-            lines.append(f"friction growing with the load: the fit's own rigid-body torque "
-                         f"after {load['iterations']} fits ({state})")
-        else:
-            lines.append("friction growing with the load: the rigid-body torque of a least-"
-                         "squares fit without it")
+    lines += [line for term in terms if term.name in settings
+              for line in [term.read_line(settings[term.name])] if line]
     return ["", *lines] if lines else []

@@ -3,8 +3,8 @@
 A least-squares estimator with one weight per joint (OLS, WLS, the physically consistent
 fit) sees the rows ``Y (T, n, d)``, ``tau (T, n)`` only through each joint's normal
 equations ``G_j = Y_j^T Y_j``, ``h_j = Y_j^T tau_j`` and ``s_j = tau_j^T tau_j``. A
-validation fits many subsets of one recording; their normal equations are sums over the
-samples, so a subset's are those of all samples minus those of the rest
+validation fits many splits of one recording; their normal equations are sums over the
+samples, so a split's are those of all samples minus those of the rest
 (:class:`NormalEquations`), at the cost of a product with the left-out rows only. Each
 joint's equations become ``d`` rows again (:meth:`NormalEquations.problem`): ``R_j =
 diag(sqrt(lambda)) V^T`` and ``c_j = R_j^+ h_j`` from the eigendecomposition of
@@ -22,7 +22,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from jaxtyping import Bool, Float
+from jaxtyping import Float
 
 from .._model._torque_model import TorqueModel
 from ._estimator import FitProblem
@@ -73,20 +73,3 @@ class NormalEquations:
             floor[j] = max(float(self.s[j] - c @ c), 0.0)
         return FitProblem(model, Y, tau, limits, warn=False, floor=floor, samples=self.samples)
 
-
-def subset_problems(model: TorqueModel, Y: Float[np.ndarray, "T n d"],
-                    tau: Float[np.ndarray, "T n"], limits: np.ndarray | None,
-                    train: list[Bool[np.ndarray, " T"]]) -> list[FitProblem]:
-    """For each mask of ``train``, the compressed problem of the rows it selects: from
-    those rows, or, where they are most of the samples, as all samples' normal equations
-    minus those of the rows it leaves out (formed once for all masks)."""
-    everything = None
-    out = []
-    for keep in train:
-        if 2 * np.count_nonzero(keep) <= len(keep):
-            equations = NormalEquations.of(Y[keep], tau[keep])
-        else:
-            everything = NormalEquations.of(Y, tau) if everything is None else everything
-            equations = everything - NormalEquations.of(Y[~keep], tau[~keep])
-        out.append(equations.problem(model, limits))
-    return out

@@ -14,7 +14,7 @@ on none of their kinds:
    else equal).
 3. **The estimator's fit** of the model so completed (OLS, WLS, physically consistent,
    L1, a box search: any), through the normal equations where the samples are a
-   validation's subset and the estimator reads only them; again, with the values each
+   validation's split and the estimator reads only them; again, with the values each
    fit gives, while a term reads every fit's values (a fixed point,
    :attr:`~sedsabso_jax.identification.AbstractTerm.iterates`), until its columns
    change by less than :data:`SETTLE_RTOL`.

@@ -130,12 +130,12 @@ class Projection(eqx.Module):
         root = samples.root
         T = root.q.shape[0]
         # the samples fitted, a mask over the whole recordings' rows
-        index = np.arange(T) if samples.keep is None else np.asarray(samples.keep)
+        mask = np.ones(T, dtype=bool) if samples.mask is None else samples.mask.copy()
         if keep is not None:
-            index = index[np.asarray(keep)]
-        mask = np.zeros(T)
-        mask[index] = 1.0
-        return cls._of(model, root, mask, weights)
+            inner = np.zeros(int(mask.sum()), dtype=bool)
+            inner[np.asarray(keep)] = True
+            mask[mask] = inner
+        return cls._of(model, root, mask.astype(float), weights)
 
     @classmethod
     def _of(cls, model: TorqueModel, root: Samples, mask: np.ndarray, weights: np.ndarray
@@ -174,10 +174,10 @@ class Projection(eqx.Module):
         r = self.recipe
         model = r.model.with_nonlinear(jnp.exp(u))
         n = model.robot.n_joints
-        coulomb, _ = model.coulomb(self.qd, jnp)
-        s = Signals(self.q, self.qd, self.qdd, self.recording, coulomb, jnp, self.rigid,
+        coulomb, _ = model.coulomb(self.qd)
+        s = Signals(self.q, self.qd, self.qdd, self.recording, coulomb, self.rigid,
                     steps=self.steps)
-        blocks = [diagonal(coulomb, n, jnp)] if r.coulomb else []
+        blocks = [diagonal(coulomb, n)] if r.coulomb else []
         blocks += [jnp.asarray(model.terms[i].columns(model, s)) for i in r.terms]
         C = jnp.concatenate(blocks, -1)
         joints = np.asarray(r.pair_joint)

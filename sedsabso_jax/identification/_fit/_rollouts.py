@@ -41,7 +41,7 @@ class ModelTorque(eqx.Module):
     model: Any  # the TorqueModel (its Coulomb shape)
 
     def __call__(self, q: Array, qd: Array) -> Array:
-        shape, reshaped = self.model.coulomb(qd, jnp)
+        shape, reshaped = self.model.coulomb(qd)
         if not reshaped:  # sign(qd), regularised: stiff, held by the implicit integrator
             shape = jnp.tanh(qd / STICKING_VELOCITY)
         return self.fc * shape + self.offset

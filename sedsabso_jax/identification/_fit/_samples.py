@@ -1,6 +1,7 @@
 """The samples a fit reads (:class:`Samples`): one or several recordings stacked, or a
-subset of them (a validation's split), with what is computed on them kept for the next
-fit: the base regressor's rows, a model's rows and their normal equations."""
+split of them (a validation's, a mask over the whole recordings' rows), with what is
+computed on them kept for the next fit: the base regressor's rows, a model's rows and
+their normal equations."""
 
 from __future__ import annotations
 
@@ -22,12 +23,12 @@ class Samples:
     """The samples a fit reads, each ``(T, n)`` (``recording``: each sample's recording,
     ``(T,)``, or None), in time order within each recording.
 
-    A :meth:`subset` remembers the samples it was taken from (``whole``, and the indices
-    ``keep`` into them): a term that carries a state along the samples integrates it on
-    the whole and takes the subset's rows. A subset is ``compressed``: a least-squares
-    estimator fits it through its normal equations (a validation's training samples,
-    whose fits are judged by their predictions only), formed from the whole's where the
-    subset is most of it and the whole's rows of that model are at hand."""
+    A :meth:`split` is the whole samples (``whole``) and a ``mask`` over their rows: a
+    term that carries a state along the samples integrates it on the whole and takes the
+    split's rows. A split is ``compressed``: a least-squares estimator fits it through its
+    normal equations (a validation's training samples, whose fits are judged by their
+    predictions only), formed from the whole's where the split is most of it and the
+    whole's rows of that model are at hand."""
 
     q: np.ndarray
     qd: np.ndarray
@@ -36,7 +37,7 @@ class Samples:
     recording: np.ndarray | None = None
     compressed: bool = False
     whole: Samples | None = None
-    keep: np.ndarray | None = None
+    mask: np.ndarray | None = None
     _kept: dict = dataclasses.field(default_factory=dict, repr=False)
 
     @classmethod
@@ -47,20 +48,20 @@ class Samples:
     def kept(self, kind: Any, key: tuple, make) -> Any:
         """``make()``, kept on these samples per (``kind``, ``key``): a model's
         :attr:`~sedsabso_jax.TorqueModel.structure`, a base's :func:`tree_key`, a split's
-        :func:`_mask_key` (what sets the value, never an object's identity)."""
+        mask (what sets the value, never an object's identity)."""
         if (kind, key) not in self._kept:
             self._kept[kind, key] = make()
         return self._kept[kind, key]
 
     @property
     def root(self) -> Samples:
-        """The whole samples (itself unless a subset)."""
+        """The whole samples (itself unless a split)."""
         return self if self.whole is None else self.whole
 
     def base_rows(self, model: TorqueModel) -> np.ndarray:
         """The base regressor's rows ``(T, n, b)`` (computed once, on the whole)."""
         if self.whole is not None:
-            return self.whole.base_rows(model)[self.keep]
+            return self.whole.base_rows(model)[self.mask]
         return self.kept("base", tree_key(model.base), lambda: np.asarray(
             model.base.regressor(self.q, self.qd, self.qdd)))
 
@@ -68,7 +69,7 @@ class Samples:
         whole = None if self.whole is None else (self.whole.q, self.whole.recording)
         return model.regressor(self.q, self.qd, self.qdd, self.recording,
                                base_rows=self.base_rows(model), every_column=every_column,
-                               whole=whole, keep=self.keep)
+                               whole=whole, keep=self.mask)
 
     def rows(self, model: TorqueModel, every_column: bool = False, cache: bool = True
              ) -> np.ndarray:
@@ -81,7 +82,7 @@ class Samples:
             return self._rows(model, True)
         found = self.root._kept.get(("rows", model.structure))
         if found is not None:
-            return found if self.whole is None else found[self.keep]
+            return found if self.whole is None else found[self.mask]
         if self.whole is not None or not cache:
             return self._rows(model, False)
         return self.kept("rows", model.structure, lambda: self._rows(model, False))
@@ -90,40 +91,43 @@ class Samples:
         """Whether the whole's rows of ``model`` are kept."""
         return ("rows", model.structure) in self.root._kept
 
-    def subset(self, keep: np.ndarray) -> Samples:
-        """The samples ``keep`` (a mask or indices) selects: a validation's split,
-        ``compressed``; one object per split (kept by the samples it selects)."""
+    def split(self, mask: np.ndarray) -> Samples:
+        """The samples ``mask`` (booleans, one per sample here) keeps: a validation's
+        split, ``compressed``, a mask over the whole's rows; one object per split (kept by
+        its mask)."""
+        mask = np.asarray(mask)
+        if mask.dtype != bool or mask.shape != self.q.shape[:1]:
+            raise ValueError(f"a split is a mask of {self.q.shape[0]} booleans, got "
+                             f"{mask.dtype} {mask.shape}")
+        if self.mask is not None:  # a split of a split: the same rows of the whole
+            inner, mask = mask, np.zeros_like(self.mask)
+            mask[np.flatnonzero(self.mask)[inner]] = True
         root = self.root
-        key = ("subset", _mask_key(keep))
-        if self.whole is None and key in self._kept:
-            return self._kept[key]
-        index = np.arange(self.q.shape[0])[keep]
-        whole_index = index if self.keep is None else np.asarray(self.keep)[index]
-        out = Samples(self.q[keep], self.qd[keep], self.qdd[keep], self.tau[keep],
-                      None if self.recording is None else self.recording[keep], True,
-                      whole=root, keep=whole_index)
-        if self.whole is None:
-            self._kept[key] = out
-        return out
+        key = ("split", mask.tobytes())
+        if key not in root._kept:
+            root._kept[key] = Samples(
+                root.q[mask], root.qd[mask], root.qdd[mask], root.tau[mask],
+                None if root.recording is None else root.recording[mask], True,
+                whole=root, mask=mask)
+        return root._kept[key]
 
     def normal_equations(self, model: TorqueModel) -> NormalEquations:
-        """The normal equations of ``model``'s rows at these samples: a subset that is
+        """The normal equations of ``model``'s rows at these samples: a split that is
         most of the whole, whose rows of ``model`` the whole has, takes the whole's less
         those of the samples it leaves out."""
         whole = self.whole
         rows = None if whole is None else whole._kept.get(("rows", model.structure))
-        if whole is None or rows is None or self.keep is None \
-                or 2 * len(self.keep) <= whole.q.shape[0]:
+        if whole is None or rows is None or self.mask is None \
+                or 2 * int(self.mask.sum()) <= whole.q.shape[0]:
             return self.kept("normal", model.structure,
                              lambda: NormalEquations.of(self.rows(model), self.tau))
-        out = np.ones(whole.q.shape[0], dtype=bool)
-        out[self.keep] = False
+        out = ~self.mask
         everything = whole.normal_equations(model)
         return everything - NormalEquations.of(rows[out], whole.tau[out])
 
     def problem(self, model: TorqueModel, limits: np.ndarray | None, warn: bool = True
                 ) -> FitProblem:
-        """What an estimator fits: the compressed rows of a subset (kept per model and
+        """What an estimator fits: the compressed rows of a split (kept per model and
         limits), or the rows themselves."""
         if self.compressed:
             key = None if limits is None else np.asarray(limits).tobytes()
@@ -152,8 +156,3 @@ def recorded(robot: Robot, data: Data) -> tuple[list[Measurements], Samples]:
     q, qd, qdd, tau, index = stacked(recordings)
     return recordings, Samples(q, qd, qdd, tau, index if is_several(data) else None)
 
-
-def _mask_key(keep: np.ndarray) -> tuple:
-    """A split's key: the samples a mask or indices ``keep`` selects, by value."""
-    keep = np.asarray(keep)
-    return keep.dtype.str, keep.shape, keep.tobytes()

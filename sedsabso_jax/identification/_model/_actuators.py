@@ -6,6 +6,7 @@ one)."""
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 from typing import Any, ClassVar
 
+import jax.numpy as jnp
 import numpy as np
 
 from ._term import AbstractTerm, InSimulator, ModelView, Signals, through_motors
@@ -25,7 +26,7 @@ class Armature(AbstractTerm):
 
     def columns(self, model: ModelView, s: Signals) -> Any:
         return through_motors(model.motor_matrix, list(range(model.robot.n_joints)),
-                              np.asarray(s.qdd))
+                              s.qdd)
 
     held_in_full: ClassVar[bool] = True
 
@@ -60,6 +61,6 @@ class CoupledMotorFriction(AbstractTerm):
         return tuple(f"{k}{m + 1}" for k in ("FVM", "FCM") for m in motors)
 
     def columns(self, model: ModelView, s: Signals) -> Any:
-        K, motors, qd = model.motor_matrix, list(model.coupled_motors), np.asarray(s.qd)
-        return np.concatenate([through_motors(K, motors, qd),
+        K, motors, qd = model.motor_matrix, list(model.coupled_motors), s.qd
+        return jnp.concatenate([through_motors(K, motors, qd),
                                through_motors(K, motors, qd, sign=True)], -1)

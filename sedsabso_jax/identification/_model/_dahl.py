@@ -37,6 +37,8 @@ on a bound), so the simpler, rate-independent state is the one delivered.
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -85,6 +87,7 @@ def _compose(first, second):
     return a2 * a1, a2 * b1 + b2
 
 
+@functools.partial(jax.jit, static_argnames="sequential")
 def dahl_state(dq: Float[ArrayLike, "T n"], start: Bool[ArrayLike, " T"],
                q_c: Float[ArrayLike, " n"], *, sequential: bool | None = None
                ) -> Float[Array, "T n"]:
@@ -92,8 +95,8 @@ def dahl_state(dq: Float[ArrayLike, "T n"], start: Bool[ArrayLike, " T"],
     (:func:`increments`), from ``z = 0`` at each ``start``, for the characteristic
     displacements ``q_c`` (``(n,)``, > 0): the exact update of the module docstring, by
     a sequential ``lax.scan`` or an associative scan (``sequential`` None: per backend,
-    :data:`SEQUENTIAL`); jit-able, differentiable in ``q_c``, vmappable over
-    populations of ``q_c``."""
+    :data:`SEQUENTIAL`); compiled once per shape, differentiable in ``q_c``, vmappable
+    over populations of ``q_c``."""
     q_c = jnp.asarray(q_c)
     dq = jnp.asarray(dq, dtype=q_c.dtype)
     start = jnp.asarray(start)
@@ -112,15 +115,3 @@ def dahl_state(dq: Float[ArrayLike, "T n"], start: Bool[ArrayLike, " T"],
     _, z = lax.scan(step, jnp.zeros(dq.shape[-1], q_c.dtype), (dq, start))
     return z
 
-
-_dahl_state = jax.jit(dahl_state, static_argnames="sequential")
-
-
-def presliding_state(dq: Float[ArrayLike, "T n"], start: Bool[ArrayLike, " T"],
-                     q_c: Float[ArrayLike, " n"], sequential: bool | None = None
-                     ) -> Float[np.ndarray, "T n"]:
-    """:func:`dahl_state` as a NumPy array (compiled once per shape)."""
-    if sequential is None:
-        sequential = jax.default_backend() in SEQUENTIAL
-    return np.asarray(_dahl_state(np.asarray(dq, dtype=float), np.asarray(start),
-                                  np.asarray(q_c, dtype=float), sequential=sequential))

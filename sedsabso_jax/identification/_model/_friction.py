@@ -3,10 +3,10 @@ friction: :class:`Quadratic`, :class:`SmoothCoulomb` and :class:`Stribeck`."""
 
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 import abc
-from types import ModuleType
 from typing import Any, ClassVar
 
 import equinox as eqx
+import jax.numpy as jnp
 import numpy as np
 
 from ._scales import AbstractVelocityScale, as_scale
@@ -32,7 +32,7 @@ class AbstractJointFriction(AbstractTerm):
         return tuple(f"{self.prefix}{j + 1}" for j in range(model.robot.n_joints))
 
     def columns(self, model: ModelView, s: Signals) -> Any:
-        return diagonal(self.torque(s), model.robot.n_joints, s.xp)
+        return diagonal(self.torque(s), model.robot.n_joints)
 
 
 class Quadratic(AbstractJointFriction):
@@ -45,7 +45,7 @@ class Quadratic(AbstractJointFriction):
     nonnegative: ClassVar[bool] = True
 
     def torque(self, s: Signals) -> Any:
-        return s.qd * s.xp.abs(s.qd)
+        return s.qd * jnp.abs(s.qd)
 
 
 class SmoothCoulomb(AbstractVelocityScale):
@@ -70,10 +70,10 @@ class SmoothCoulomb(AbstractVelocityScale):
         return ()
 
     def columns(self, model: ModelView, s: Signals) -> Any:
-        return s.xp.zeros(s.batch + (model.robot.n_joints, 0))
+        return jnp.zeros(s.batch + (model.robot.n_joints, 0))
 
-    def coulomb(self, qd: Any, xp: ModuleType = np) -> Any:
-        return xp.tanh(qd / self.per_joint(qd.shape[-1], xp))
+    def coulomb(self, qd: Any) -> Any:
+        return jnp.tanh(qd / self.per_joint(qd.shape[-1]))
 
     def held(self, model: ModelView, values: np.ndarray) -> InSimulator:
         """The Coulomb level is the simulator's (MuJoCo's ``frictionloss``); the shape near
@@ -104,6 +104,5 @@ class Stribeck(AbstractVelocityScale):
         return tuple(f"FS{j + 1}" for j in range(n))
 
     def columns(self, model: ModelView, s: Signals) -> Any:
-        xp, n = s.xp, model.robot.n_joints
-        v = self.per_joint(n, xp)
-        return diagonal(xp.exp(-(s.qd / v) ** 2) * s.coulomb, n, xp)
+        n = model.robot.n_joints
+        return diagonal(jnp.exp(-(s.qd / self.per_joint(n)) ** 2) * s.coulomb, n)

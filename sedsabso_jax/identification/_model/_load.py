@@ -6,6 +6,7 @@ import dataclasses
 from typing import Any, ClassVar
 
 import equinox as eqx
+import jax.numpy as jnp
 import numpy as np
 
 from .._options import as_floats
@@ -63,6 +64,14 @@ class LoadFriction(AbstractTerm):
         rigid = model.rigid_values(np.asarray(values, dtype=float))
         return dataclasses.replace(self, load_point=tuple(float(v) for v in rigid))
 
+    def read_line(self, step: dict) -> str:
+        if "settled" in step:
+            state = "settled" if step["settled"] else "NOT settled"
+            return (f"friction growing with the load: the fit's own rigid-body torque after "
+                    f"{step['iterations']} fits ({state})")
+        return ("friction growing with the load: the rigid-body torque of a least-squares "
+                "fit without it")
+
     @property
     def text(self) -> str:
         chosen = [o for o, on in zip(self.options, (self.viscous, self.fixed_point)) if on]
@@ -83,16 +92,16 @@ class LoadFriction(AbstractTerm):
         return tuple(f"{k}{j + 1}" for k in kinds for j in range(n))
 
     def columns(self, model: ModelView, s: Signals) -> Any:
-        xp, n = s.xp, model.robot.n_joints
+        n = model.robot.n_joints
         if self.load_point is None and s.probe is None:  # not fitted: the robot's own
             point = model.rigid_values(model.prior_values)
         else:
             point = np.asarray(self.load_point)
-        load = xp.abs(s.rigid_torque(point))
-        out = [diagonal(load * s.coulomb, n, xp)]
+        load = jnp.abs(s.rigid_torque(point))
+        out = [diagonal(load * s.coulomb, n)]
         if self.viscous:
-            out.append(diagonal(load * s.qd, n, xp))
-        return xp.concatenate(out, -1)
+            out.append(diagonal(load * s.qd, n))
+        return jnp.concatenate(out, -1)
 
     def settings(self) -> dict:
         return {"load_viscous": self.viscous, "load_fixed_point": self.fixed_point}

@@ -5,10 +5,9 @@ state along each recording (:mod:`._dahl`)."""
 from typing import Any, ClassVar
 
 import equinox as eqx
-import jax.numpy as jnp
 import numpy as np
 
-from ._dahl import dahl_state, presliding_state
+from ._dahl import dahl_state
 from ._scales import AbstractScale, as_scale
 from ._term import AbstractTerm, InSimulator, ModelView, Signals, diagonal
 
@@ -35,7 +34,7 @@ class Presliding(AbstractScale):
     per joint, or with ``fitted=True`` one per joint searched by the fit within
     :attr:`bounds`, up to ``largest`` where given: ``presliding:fit:0.02`` in the
     command line's text). The columns read each recording's samples in time order, whole: a
-    subset's rows are the whole recording's, taken. ``scan``: how the state is
+    split's rows are the whole recording's, taken. ``scan``: how the state is
     integrated, ``"sequential"`` (a ``lax.scan``), ``"associative"`` (a prefix
     composition, parallel in time) or ``"auto"``, per backend (:data:`~._dahl.SEQUENTIAL`)."""
 
@@ -108,12 +107,8 @@ class Presliding(AbstractScale):
         n = model.robot.n_joints
         dq, start = s.increments()
         sequential = None if self.scan == "auto" else self.scan == "sequential"
-        z: Any
-        if s.xp is jnp:  # inside a compiled search: the state of the trial's q_c
-            z = dahl_state(dq, start, self.per_joint(n, jnp), sequential=sequential)
-        else:
-            z = presliding_state(dq, start, self.per_joint(n), sequential)
-        return diagonal(s.taken(z), n, s.xp)
+        z = dahl_state(dq, start, self.per_joint(n), sequential=sequential)
+        return diagonal(s.taken(z), n)
 
     def settings(self) -> dict:
         out = super().settings()

@@ -5,11 +5,11 @@ the converter and check of a scale given as one number or one per joint."""
 
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 import dataclasses
-from types import ModuleType
 from typing import Any, ClassVar
 
 import equinox as eqx
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from .._options import as_float, as_floats, check_number
@@ -57,13 +57,13 @@ class AbstractScale(AbstractTerm):
             raise ValueError(f"{type(self).__name__}'s fitted must be True or False, got "
                              f"{self.fitted!r}")
 
-    def per_joint(self, n: int, xp: ModuleType = np) -> Any:
+    def per_joint(self, n: int) -> Any:
         """The scale of each of ``n`` joints."""
-        v = xp.asarray(self.scale, dtype=float)
+        v = jnp.asarray(self.scale, dtype=float)
         if v.ndim and v.shape != (n,):
             raise ValueError(f"{self.name}'s {self.scale_name} must be one number or one "
                              f"per joint ({n}), got {len(v)}")
-        return xp.broadcast_to(v, (n,))
+        return jnp.broadcast_to(v, (n,))
 
     def search_bounds(self) -> tuple[float, float]:
         """The box the fit searches the scales in (:attr:`bounds` unless a term narrows
@@ -102,8 +102,9 @@ class AbstractScale(AbstractTerm):
         n = model.robot.n_joints
         lo, hi = self.search_bounds()
         return Nonlinear(tuple(f"{self.symbol}{j + 1}" for j in range(n)),
-                         np.clip(self.per_joint(n), lo, hi), np.full(n, lo), np.full(n, hi),
-                         self.scale_unit)
+                         np.clip(np.broadcast_to(np.asarray(self.scale, float), (n,)), lo, hi),
+                         np.full(n, lo),
+                         np.full(n, hi), self.scale_unit)
 
     def with_nonlinear(self, values: Any) -> AbstractTerm:
         if isinstance(values, jax.core.Tracer):  # a trial inside a compiled search

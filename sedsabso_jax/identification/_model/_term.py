@@ -5,15 +5,15 @@ read (:class:`Signals`) and the parameters it has that a fit searches
 A term is an immutable value. It owns everything about itself:
 
 - its columns (:meth:`~AbstractTerm.columns`, named by :meth:`~AbstractTerm.names`),
-  written once against the array namespace of the :class:`Signals` (NumPy, or
-  ``jax.numpy`` inside the fit's compiled search), or a new shape of the Coulomb
-  columns (:meth:`~AbstractTerm.coulomb`);
+  computed with ``jax.numpy`` (the same code gives a fit's columns and, traced, the
+  compiled search's), or a new shape of the Coulomb columns
+  (:meth:`~AbstractTerm.coulomb`);
 - the constraint a physical body puts on its coefficients (:attr:`~AbstractTerm.nonnegative`,
   :attr:`~AbstractTerm.body`), for the physically consistent fit;
 - the parameters that enter its columns nonlinearly (:meth:`~AbstractTerm.nonlinear`),
   their bounds and how the term reads a trial of them (:meth:`~AbstractTerm.with_nonlinear`);
 - a state along the samples, if it has one: the :class:`Signals` give each recording's
-  increments from its start (:meth:`Signals.increments`) and take a subset's rows from
+  increments from its start (:meth:`Signals.increments`) and take a split's rows from
   the whole recording's (:meth:`Signals.taken`);
 - what it reads of the model's own fitted values, if anything (:attr:`~AbstractTerm.waiting`,
   :meth:`~AbstractTerm.reading`): the fit gives it a first fit's values, and again each
@@ -28,12 +28,13 @@ these answers.
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 import abc
 import dataclasses
-from types import ModuleType
 from typing import Any, Protocol
 
 import equinox as eqx
+import jax.numpy as jnp
 import numpy as np
 
+from ..._deprecation import warn
 from ...dynamics._base_parameters import BaseParameters
 from ...dynamics._robot import Robot
 from ._dahl import increments
@@ -56,9 +57,7 @@ class Nonlinear:
 class Signals:
     """What a term's columns read, each ``(..., n)``: positions, velocities,
     accelerations; ``recording`` each sample's recording (``(...)``) or None (one
-    recording, or a new motion); ``coulomb`` the model's Coulomb shape ``c(qd)``;
-    ``xp`` the array namespace to compute with (``numpy``, or ``jax.numpy`` in a
-    compiled search).
+    recording, or a new motion); ``coulomb`` the model's Coulomb shape ``c(qd)``.
 
     ``rigid``: the rows of the model's rigid-body columns (the base columns but each
     joint's viscous and Coulomb friction, then the columns of terms that are bodies),
@@ -66,17 +65,17 @@ class Signals:
     read instead (the model's random states, where it finds which columns the base
     spans).
 
-    ``whole``, ``keep``: signals of a subset of the samples know the samples they were
-    taken from and where (a term whose columns carry a state along the samples
-    integrates it on the whole and takes the subset, :meth:`taken`); ``steps``: the
-    whole's :meth:`increments`, computed before (a compiled search's)."""
+    ``whole``, ``keep``: signals of a split of the samples know the samples they were
+    taken from and which (``keep``, a mask over the whole's rows; a term whose columns
+    carry a state along the samples integrates it on the whole and takes the split,
+    :meth:`taken`); ``steps``: the whole's :meth:`increments`, computed before (a
+    compiled search's)."""
 
     q: Any
     qd: Any
     qdd: Any
     recording: Any
     coulomb: Any
-    xp: ModuleType = np
     rigid: Any = None
     probe: np.ndarray | None = None
     whole: "Signals | None" = None
@@ -87,6 +86,12 @@ class Signals:
     def batch(self) -> tuple[int, ...]:
         return tuple(self.qd.shape[:-1])
 
+    @property
+    def xp(self) -> Any:
+        """Deprecated: terms compute with ``jax.numpy`` (this is it)."""
+        warn("Signals.xp", "jax.numpy", removed_after="0.6")
+        return jnp
+
     def rigid_torque(self, values: np.ndarray) -> np.ndarray:
         """The model's rigid-body torque ``(..., n)`` with the rigid-body columns'
         ``values`` (:meth:`~._torque_model.TorqueModel.rigid_values`; the probe's torque
@@ -95,7 +100,7 @@ class Signals:
             return self.probe
         if self.rigid is None:
             raise ValueError("these signals carry no rigid-body rows")
-        return self.rigid @ np.asarray(values)
+        return self.rigid @ jnp.asarray(values)
 
     def increments(self) -> tuple[np.ndarray, np.ndarray]:
         """Each sample's position increment from the previous one in its recording
@@ -167,9 +172,9 @@ class AbstractTerm(eqx.Module):
     @abc.abstractmethod
     def columns(self, model: ModelView, s: Signals) -> Any:
         """The columns ``(..., n, len(names))`` at the samples of ``s``, computed with
-        ``s.xp``."""
+        ``jax.numpy``."""
 
-    def coulomb(self, qd: Any, xp: ModuleType = np) -> Any:
+    def coulomb(self, qd: Any) -> Any:
         """The Coulomb columns' values in place of ``sign(qd)``, or None to keep them."""
         return None
 
@@ -224,6 +229,12 @@ class AbstractTerm(eqx.Module):
         itself for a term that reads none."""
         return self
 
+    def read_line(self, step: dict) -> str:
+        """A report's line on what the term read of the fit (``step``: the fit's record
+        of it, ``iterations`` and, for a fixed point, ``settled``); empty for a term that
+        reads none."""
+        return ""
+
     @property
     def text(self) -> str:
         """The term in the command line's ``--friction`` text (``name[:option]``)."""
@@ -243,18 +254,17 @@ class AbstractTerm(eqx.Module):
                 for f in dataclasses.fields(self)}
 
 
-def diagonal(values: Any, n: int, xp: ModuleType = np) -> Any:
+def diagonal(values: Any, n: int) -> Any:
     """``(..., n, n)`` columns with ``values (..., n)`` on joint ``j``'s own column ``j``
     (exact zeros elsewhere)."""
-    values = xp.asarray(values)
-    return xp.where(np.eye(n, dtype=bool), values[..., None, :], 0.0)
+    return jnp.where(np.eye(n, dtype=bool), jnp.asarray(values)[..., None, :], 0.0)
 
 
-def through_motors(K: np.ndarray, motors: list[int], v: np.ndarray, sign: bool = False
-                   ) -> np.ndarray:
+def through_motors(K: np.ndarray, motors: list[int], v: Any, sign: bool = False) -> Any:
     """Columns ``K[m, j] u_m`` for joint ``j``, motor ``m`` of ``motors``, with ``u_m =
     K_m . v`` (or its sign): a motor-side coefficient seen at the joints."""
-    u = v @ K[motors].T  # (..., motors)
+    Km = jnp.asarray(K)[np.asarray(motors, dtype=int)]
+    u = jnp.asarray(v) @ Km.T  # (..., motors)
     if sign:
-        u = np.sign(u)
-    return K[motors].T * u[..., None, :]
+        u = jnp.sign(u)
+    return Km.T * u[..., None, :]

@@ -31,6 +31,7 @@ from typing import Any
 
 import equinox as eqx
 import jax
+import jax.numpy as jnp
 import numpy as np
 from jaxtyping import ArrayLike, Float, Int
 
@@ -49,9 +50,9 @@ DEFAULT_SEARCH = CoordinateSearch()
 def tree_key(tree: Any) -> tuple:
     """A hashable key of ``tree`` (a pytree: a term, a base, a search; for a model its
     :attr:`~TorqueModel.structure`, since a model's own tree also carries the answers it
-    has cached) by its structure and values: its tree structure (the classes, their static fields) and each leaf's
-    value (an array's shape, dtype and bytes). Two trees with equal keys compute the same
-    columns, whatever their ``settings()`` say."""
+    has cached) by its structure and values: its tree structure (the classes, their
+    static fields) and each leaf's value (an array's shape, dtype and bytes). Two trees
+    with equal keys compute the same columns, whatever their ``settings()`` say."""
     leaves, treedef = jax.tree_util.tree_flatten(tree)
     return (treedef, tuple(_leaf_key(x) for x in leaves))
 
@@ -247,14 +248,14 @@ class TorqueModel(eqx.Module):
                     if c is not None}
         return np.array([c for c in range(self.base.rank) if c not in friction], dtype=int)
 
-    def coulomb(self, qd: Any, xp: Any = np) -> tuple[Any, bool]:
+    def coulomb(self, qd: Any) -> tuple[Any, bool]:
         """The model's Coulomb shape at ``qd`` (a term's, else ``sign(qd)``) and whether a
         term reshaped it."""
         for term in reversed(self.terms):
-            shape = term.coulomb(qd, xp)
+            shape = term.coulomb(qd)
             if shape is not None:
                 return shape, True
-        return xp.sign(qd), False
+        return jnp.sign(qd), False
 
     @property
     def prior_values(self) -> np.ndarray:
@@ -278,21 +279,21 @@ class TorqueModel(eqx.Module):
             start += size
         return np.concatenate(out)
 
-    def signals(self, q, qd, qdd, recording=None, base_rows=None, *, xp: Any = np,
-                probe=None, whole=None, keep=None, steps=None) -> Signals:
+    def signals(self, q, qd, qdd, recording=None, base_rows=None, *, probe=None, whole=None,
+                keep=None, steps=None) -> Signals:
         """What the terms' columns read at these samples (:class:`~._term.Signals`):
-        the model's Coulomb shape computed with ``xp``; ``base_rows`` the base regressor
+        the model's Coulomb shape; ``base_rows`` the base regressor
         (the rigid-body rows are its columns but friction, then the columns of the terms
         that are bodies); ``whole`` and ``keep``: these samples are ``keep`` of the whole
         recordings ``(q, recording)``; ``steps``: the whole's increments."""
-        coulomb, _ = self.coulomb(qd, xp)
+        coulomb, _ = self.coulomb(qd)
         whole_signals = None if whole is None else Signals(
             whole[0], whole[0], whole[0], whole[1], None)
-        s = Signals(q, qd, qdd, recording, coulomb, xp, None, probe, whole_signals, keep, steps)
+        s = Signals(q, qd, qdd, recording, coulomb, None, probe, whole_signals, keep, steps)
         if base_rows is None:
             return s
         bodies = [term.columns(self, s) for term in self.terms if term.body]
-        rigid = xp.concatenate([base_rows[..., self.rigid_columns], *bodies], -1) \
+        rigid = jnp.concatenate([base_rows[..., self.rigid_columns], *bodies], -1) \
             if bodies else base_rows[..., self.rigid_columns]
         return dataclasses.replace(s, rigid=rigid)
 
@@ -306,8 +307,9 @@ class TorqueModel(eqx.Module):
         s = self.signals(q, qd, qdd, recording, Y, probe=probe, whole=whole, keep=keep)
         if self.coulomb(qd)[1]:  # a term reshapes the Coulomb columns
             Y = Y.copy()
-            Y[..., np.arange(n), np.array(self.base.joint_columns("FC"))] = s.coulomb
-        extra = [term.columns(self, s) for term in self.terms]
+            fc = np.array(self.base.joint_columns("FC"))
+            Y[..., np.arange(n), fc] = np.asarray(s.coulomb)
+        extra = [np.asarray(term.columns(self, s)) for term in self.terms]
         return np.concatenate([Y, *extra], -1)
 
     def regressor(self, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
@@ -321,8 +323,8 @@ class TorqueModel(eqx.Module):
         recordings a state restarts at); None: one recording, or a new motion (the
         offsets' mean); ``base_rows``: the base regressor at these samples when already
         computed; ``every_column``: also the extra columns the base regressor spans;
-        ``whole``, ``keep``: these samples are ``keep`` of the whole recordings ``(q,
-        recording)`` (a state is integrated along the whole)."""
+        ``whole``, ``keep``: these samples are the rows the mask ``keep`` selects of the
+        whole recordings ``(q, recording)`` (a state is integrated along the whole)."""
         Y = self._full_regressor(q, qd, qdd, recording, base_rows, whole=whole, keep=keep)
         if every_column:
             return Y

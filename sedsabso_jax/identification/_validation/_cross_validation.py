@@ -119,10 +119,10 @@ def cross_validation_of(estimator: Estimator, model: TorqueModel, samples: Sampl
         if not model.waiting:
             samples.rows(model)  # the splits' rows are taken from the whole's
         for train, test in zip(splits.train, splits.test):
-            fitted = fit_model(estimator, model, samples.subset(train), limits, warn=False)
+            fitted = fit_model(estimator, model, samples.split(train), limits, warn=False)
             measured.append(samples.tau[test])
             tested.append(every[test])
-            predicted.append(samples.subset(test).predict(fitted.model, fitted.fit.x))
+            predicted.append(samples.split(test).predict(fitted.model, fitted.fit.x))
             scores.append(score_of(validation_metrics(measured[-1], predicted[-1], limits)))
             if on_fit is not None:
                 on_fit()
