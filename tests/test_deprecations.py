@@ -78,3 +78,16 @@ def test_0_3_solver_names_are_gone():
         with pytest.raises(TypeError):
             sj.SEDSABSO(**{old: 1})
     assert not hasattr(sj.SEDSABSO(), "check")  # hyperparameters are checked when built
+
+
+def test_signals_xp_is_jax_numpy_and_deprecated():
+    """Terms compute with ``jax.numpy`` only: a term of one's own that still reads
+    ``s.xp`` gets ``jax.numpy``, with the warning pointing at its line."""
+    import jax.numpy as jnp
+
+    from sedsabso_jax.identification import Signals
+
+    s = Signals(np.zeros((2, 3)), np.zeros((2, 3)), np.zeros((2, 3)), None, None)
+    with pytest.deprecated_call(match=r"^Signals\.xp is deprecated .* use jax\.numpy$") as w:
+        assert s.xp is jnp
+    assert w[0].filename == __file__

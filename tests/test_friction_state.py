@@ -151,15 +151,11 @@ class SharedDrag(sj.identification.AbstractScale):
     """A term of the test's own: one column reaching every joint's row, ``sum_j
     tanh(qd_j / v)`` on each (a drag the joints share), its ``v`` searched."""
 
-    velocity: float | tuple[float, ...] = 0.05
+    velocity: float | tuple[float, ...] = sj.identification.scale(
+        0.05, bounds=(1e-3, 1.0), unit="rad/s", symbol="v_shared")
     fitted: bool = True
     name: ClassVar[str] = "shared"
     nonnegative: ClassVar[bool] = False
-    bounds: ClassVar[tuple[float, float]] = (1e-3, 1.0)
-    scale_name: ClassVar[str] = "velocity"
-    scale_unit: ClassVar[str] = "rad/s"
-    default_scale: ClassVar[float] = 0.05
-    symbol: ClassVar[str] = "v_shared"
 
     def names(self, model):
         return ("DRAG",)

@@ -218,6 +218,6 @@ def test_a_displacement_the_data_cannot_place_is_not_determined():
                                rtol=0.1)
     from sedsabso_jax.identification._default._stages import stage_lines
 
-    line = stage_lines(fit.settings)[1]
+    line = stage_lines(fit.settings, fit.model.terms)[1]
     assert re.search(r"q_c2 = [0-9.e-]+ rad \(not determined\)", line), line
     assert re.search(r"q_c1 = [0-9.e-]+ \+- [0-9.e-]+ rad,", line), line

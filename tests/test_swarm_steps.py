@@ -382,3 +382,54 @@ def test_a_swarm_defined_later_is_named_in_swarms():
     finally:
         del REGISTERED["SlowPSO"]
     assert "SlowPSO" not in sj.optim.SWARMS
+
+
+def test_a_swarm_written_outside_the_package_from_public_names():
+    """A swarm of one's own, one class from ``sj.optim``'s public names only (a PSO of
+    constant inertia): it registers itself by giving ``paper()``, runs under
+    ``sj.minimise`` and gives LDWPSO's numbers with the inertia held (the same updates)."""
+    import dataclasses
+
+    from sedsabso_jax.optim._swarm import REGISTERED
+
+    O = sj.optim
+
+    class ConstantPSO(O.AbstractSwarm):
+        population_size: int = 20
+        w: float = 0.6
+
+        @classmethod
+        def paper(cls):
+            return cls()
+
+        def vmax(self, lower, upper):
+            return 0.5 * (upper - lower)
+
+        def evaluations(self, n_active):
+            return n_active
+
+        def propose(self, k, s, draws, lower, upper):
+            r1, r2 = draws
+            v = jnp.clip(self.w * s.v + 2.0 * r1 * (s.pbest_x - s.x)
+                         + 2.0 * r2 * (s.guide_x - s.x), -self.vmax(lower, upper),
+                         self.vmax(lower, upper))
+            return dataclasses.replace(s, x=jnp.clip(s.x + v, lower, upper), v=v)
+
+        def absorb(self, k, s, raw):
+            if k == O.INITIAL:
+                return O.initial_bests(s, raw)
+            s, (gx, gf) = O.absorb_positions(s, raw, 1)
+            return dataclasses.replace(s, guide_x=gx, guide_f=gf)
+
+    try:
+        assert sj.optim.SWARMS["ConstantPSO"] is ConstantPSO
+        lo, hi = -jnp.ones(3), jnp.ones(3)
+        sphere = lambda x, args: jnp.sum((x - 0.3) ** 2)  # noqa: E731
+        mine = sj.minimise(sphere, ConstantPSO(), lo, hi, key=jax.random.key(0),
+                           iterations=40)
+        theirs = sj.minimise(sphere, sj.LDWPSO(population_size=20, w_start=0.6, w_end=0.6),
+                             lo, hi, key=jax.random.key(0), iterations=40)
+        np.testing.assert_array_equal(mine.x, theirs.x)
+        assert float(mine.f) < 1e-4
+    finally:
+        del REGISTERED["ConstantPSO"]

@@ -8,6 +8,7 @@ from typing import ClassVar
 
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 import sedsabso_jax as sj
 from sedsabso_jax.identification import AbstractTerm, diagonal
@@ -46,3 +47,47 @@ def test_a_term_whose_settings_omit_a_field_gets_its_own_columns():
     np.testing.assert_array_equal(Y[..., -n:], diagonal(qd * np.abs(qd) ** 2, n))
     # equal values are one structure, whatever the instance
     assert sj.TorqueModel.of(robot, Power(3.0)).structure == cubic.structure  # a new base
+
+
+def test_a_scale_term_declares_its_scale_field():
+    """An ``AbstractScale`` declares its scale with ``scale(...)``: the declaration gives
+    the field, its default, bounds, unit and the searched values' names; a class that
+    declares none (0.5's class variables) is refused when built, by name."""
+    from sedsabso_jax.identification import AbstractScale, scale
+
+    class Wobble(AbstractScale):
+        period: float | tuple[float, ...] = scale(0.3, bounds=(0.1, 2.0), unit="rad",
+                                                  symbol="p")
+        fitted: bool = True
+        name: ClassVar[str] = "wobble"
+        nonnegative: ClassVar[bool] = False
+
+        def names(self, model):
+            return tuple(f"W{j + 1}" for j in range(model.robot.n_joints))
+
+        def columns(self, model, s):
+            return diagonal(jnp.sin(s.q / self.per_joint(model.robot.n_joints)),
+                            model.robot.n_joints)
+
+    found = Wobble().nonlinear(sj.TorqueModel.of(sj.robots.rs010n()))
+    assert found.names == ("p1", "p2", "p3") and found.unit == "rad"
+    np.testing.assert_array_equal(found.values, [0.3] * 3)
+    np.testing.assert_array_equal(found.upper, [2.0] * 3)
+    assert Wobble.parse("0.5").period == 0.5
+    assert Wobble(period=0.5, fitted=False).text == "wobble:0.5"
+
+    class Undeclared(AbstractScale):
+        period: float = 0.3
+        fitted: bool = False
+        name: ClassVar[str] = "undeclared"
+        nonnegative: ClassVar[bool] = False
+
+        def names(self, model):
+            return ()
+
+        def columns(self, model, s):
+            return None
+
+    with pytest.raises(TypeError, match=r"Undeclared must declare one scale field with "
+                                        r"scale\(\.\.\.\), found 0"):
+        Undeclared()

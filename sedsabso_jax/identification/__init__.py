@@ -79,6 +79,7 @@ from ._model._order import FRICTION_TERMS as FRICTION_TERMS
 from ._model._order import TERMS as TERMS
 from ._model._order import parse_friction as parse_friction
 from ._model._scales import AbstractScale as AbstractScale
+from ._model._scales import scale as scale
 from ._model._term import AbstractTerm as AbstractTerm
 from ._model._term import InSimulator as InSimulator
 from ._model._term import Nonlinear as Nonlinear
@@ -114,7 +115,7 @@ __all__ = [
     "PRIOR_STRENGTHS", "estimator_candidates", "candidate_models", "Choice", "Default",
     "DEFAULT",
     "DefaultValidation", "nrms_over_limits", "FRICTION_TERMS", "TERMS", "AbstractTerm",
-    "AbstractScale", "Signals", "Nonlinear", "diagonal", "Fitted", "SETTLE_RTOL",
+    "AbstractScale", "scale", "Signals", "Nonlinear", "diagonal", "Fitted", "SETTLE_RTOL",
     "parse_friction", "figure_torques", "extrapolation", "Extrapolation", "Splits",
     "PAYLOAD_PARAMETERS", "Projection", "AbstractSearch", "CoordinateSearch", "Held",
     "PopulationSearch", "LeastSquaresSearch", "dahl_state", "increments", "GAIN_METHODS",

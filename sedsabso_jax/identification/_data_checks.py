@@ -9,12 +9,8 @@ radians, torques in the wrong unit), a validation whose splits cannot be fitted
 (:func:`check_splits`), the same recording given with and without a payload
 (:func:`check_distinct`), drive gains that are not positive (:func:`check_gains`). Data a
 fit can still use get a ``UserWarning`` naming what and where (a joint that never moves,
-a poor excitation, torques beyond the effort limits).
-
-The thresholds hold with a wide margin on the shipped real recordings (the KUKA LWR4+'s
-two runs, the Franka Panda's and the Staubli TX40's, ``benchmarks/real_robots.py``): their
-regressors' condition numbers are 6 to 54, their joints span 1.5 to 7 rad, their
-positions lie inside the URDFs' limits, their torques below 0.71 of the effort limits.
+a poor excitation, torques beyond the effort limits). How the thresholds sit against the
+shipped real recordings: docs/explanation/identification-defaults.md.
 """
 
 from __future__ import annotations

@@ -3,7 +3,10 @@ of robots (a problem is a fitness over a box). The common names (``minimise``,
 ``AbstractSolver``, ``SEDSABSO``, ``BSO``, ``LDWPSO``, ``Evosax``, ``BlackBox``,
 ``L1Residual``, ``Result``, ``box_around``, ``iterations_for_budget``,
 ``evaluation_counts``) are ``sedsabso_jax``'s; the least-squares and L1 baselines are
-:mod:`sedsabso_jax.baselines`. Here: what a new solver or a study of the swarms needs."""
+:mod:`sedsabso_jax.baselines`. Here: what a new solver or a study of the swarms needs,
+a swarm of your own included (:class:`AbstractSwarm`, its :class:`SwarmState` and the
+rounds' helpers: :data:`INITIAL`, :func:`initial_bests`, :func:`absorb_positions`,
+:func:`swarm_best`, :func:`extend`)."""
 
 from __future__ import annotations
 
@@ -18,12 +21,18 @@ from ._linear import Factorization as Factorization
 from ._linear import factorize as factorize
 from ._linear import l1_solve as l1_solve
 from ._linear import l1_solve_box as l1_solve_box
+from ._population import INITIAL as INITIAL
 from ._population import SwarmState as SwarmState
+from ._population import absorb_positions as absorb_positions
+from ._population import extend as extend
+from ._population import initial_bests as initial_bests
+from ._population import swarm_best as swarm_best
 from ._registry import SWARMS as SWARMS
 from ._swarm import AbstractSwarm as AbstractSwarm
 
 __all__ = [
-    "AbstractSwarm", "SwarmState", "BeetleStep", "AbstractFitness", "evosax_names",
+    "AbstractSwarm", "SwarmState", "INITIAL", "initial_bests", "absorb_positions",
+    "swarm_best", "extend", "BeetleStep", "AbstractFitness", "evosax_names",
     "SWARMS", "clear_compiled", "CACHE_SIZE", "Factorization", "factorize", "l1_solve",
     "l1_solve_box",
 ]

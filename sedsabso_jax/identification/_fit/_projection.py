@@ -6,8 +6,9 @@ trial of the nonlinear ones.
 A model is linear in every value but the few parameters ``u`` (log scale) its terms
 search (:meth:`~sedsabso_jax.TorqueModel.nonlinear`). Its columns split in two: those no
 trial moves (``A``, their normal equations formed once) and those a trial moves (``C(u)``,
-found by moving ``u``: a term's own columns, the Coulomb columns a Coulomb shape
-reshapes, and the columns that read that shape). A moved column is nonzero on few joints'
+those whose derivative in ``u`` is nonzero, by forward mode through the terms' own code:
+a term's own columns, the Coulomb columns a Coulomb shape reshapes, and the columns that
+read that shape). A moved column is nonzero on few joints'
 rows (one, for a joint's own friction), so each is held as its values on those rows
 only: ``V (T, K)``, one column per (column, joint) pair. For a trial the problem computes
 ``V(u)`` with the terms' own code (``jax.numpy``), the cross products ``A^T C``, ``C^T C``,
@@ -45,8 +46,6 @@ from ._samples import Samples
 #: columns are scaled to unit norm first): keeps a trial with a vanishing column (a
 #: presliding displacement far above every motion) solvable.
 RIDGE = 1e-12
-#: How far (in ``u``, log scale) the parameters are moved to find the columns they move.
-PROBE_STEP = 0.5
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -254,13 +253,31 @@ class Projection(eqx.Module):
 
 
 def _moved(model: TorqueModel, root: Samples, Y0: np.ndarray) -> tuple[np.ndarray, Recipe]:
-    """Which of ``model``'s every columns its nonlinear parameters move (its rows ``Y0``
-    against those with the parameters moved by :data:`PROBE_STEP`), and the recipe."""
+    """Which of ``model``'s every columns its searched parameters move, and the recipe: a
+    column moves where its derivative with respect to them is nonzero (forward mode
+    through the Coulomb shape and the terms' own columns at the start values, along one
+    fixed direction of positive weights, which no model's structure cancels); a column
+    reaches a joint's row where its value (``Y0``) or its derivative is nonzero there."""
     u0 = np.log(np.concatenate([f.values for _, f in model.nonlinear()]))
-    Y1 = root.rows(model.with_nonlinear(np.exp(u0 + PROBE_STEP)), every_column=True,
-                   cache=False)
-    moved = np.any(Y0 != Y1, axis=(0, 1))
-    return moved, _recipe(model, moved, (Y0 != 0) | (Y1 != 0))
+    q, qd, qdd, recording, steps, rigid = _signals(model, root)
+
+    def columns(u):
+        m = model.with_nonlinear(jnp.exp(u))
+        coulomb, _ = m.coulomb(qd)
+        s = Signals(q, qd, qdd, recording, coulomb, rigid, steps=steps)
+        return coulomb, [jnp.asarray(t.columns(m, s)) for t in m.terms]
+
+    direction = np.random.default_rng(0).uniform(0.5, 1.5, u0.shape)
+    _, (d_coulomb, d_terms) = jax.jvp(columns, (jnp.asarray(u0),), (jnp.asarray(direction),))
+    derivative = np.zeros(Y0.shape, dtype=bool)
+    d_coulomb = np.asarray(d_coulomb) != 0
+    for j, c in enumerate(model.base.joint_columns("FC")):
+        if c is not None:
+            derivative[:, j, c] = d_coulomb[:, j]
+    d_terms = [np.asarray(d).reshape(Y0.shape[:2] + (-1,)) != 0 for d in d_terms]
+    derivative[..., model.base.rank:] = np.concatenate(d_terms, -1)
+    moved = np.any(derivative, axis=(0, 1))
+    return moved, _recipe(model, moved, (Y0 != 0) | derivative)
 
 
 def _signals(model: TorqueModel, root: Samples) -> tuple:
@@ -277,7 +294,7 @@ def _signals(model: TorqueModel, root: Samples) -> tuple:
 
 def _recipe(model: TorqueModel, moved: np.ndarray, nonzero: np.ndarray) -> Recipe:
     """The blocks, pairs and rows of ``model``'s moved columns (``moved``: per column of
-    every column, ``nonzero (T, n, D)``: where either probe's rows were nonzero)."""
+    every column, ``nonzero (T, n, D)``: where a column's value or derivative is nonzero)."""
     rank = model.base.rank
     sizes = [len(t.names(model)) for t in model.terms]
     starts = np.cumsum([rank, *sizes])[:-1]

@@ -9,13 +9,15 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
-from ._scales import AbstractVelocityScale, as_scale
+from ._scales import AbstractScale, scale
 from ._term import AbstractTerm, InSimulator, ModelView, Signals, diagonal
 
 #: Velocity scale (rad/s or m/s) of :class:`SmoothCoulomb` unless told.
 SMOOTH_VELOCITY = 0.02
 #: Stribeck velocity (rad/s or m/s) of :class:`Stribeck` unless told.
 STRIBECK_VELOCITY = 0.1
+#: The box a fit searches a velocity scale in (rad/s or m/s).
+VELOCITY_BOUNDS = (1e-4, 1.0)
 
 
 class AbstractJointFriction(AbstractTerm):
@@ -48,19 +50,17 @@ class Quadratic(AbstractJointFriction):
         return s.qd * jnp.abs(s.qd)
 
 
-class SmoothCoulomb(AbstractVelocityScale):
+class SmoothCoulomb(AbstractScale):
     """Coulomb friction without the jump at rest: ``tanh(qd_j / velocity)`` in place of
     ``sign(qd_j)`` in each joint's Coulomb column (``velocity`` in rad/s or m/s, > 0:
     one, one per joint, or with ``fitted=True`` one per joint searched by the fit); no
     columns of its own."""
 
-    velocity: float | tuple[float, ...] = eqx.field(default=SMOOTH_VELOCITY,
-                                                    converter=as_scale)
+    velocity: float | tuple[float, ...] = scale(SMOOTH_VELOCITY, bounds=VELOCITY_BOUNDS,
+                                                unit="rad/s", symbol="v_smooth")
     fitted: bool = False
     name: ClassVar[str] = "smooth"
     nonnegative: ClassVar[bool] = False
-    symbol: ClassVar[str] = "v_smooth"
-    default_scale: ClassVar[float] = SMOOTH_VELOCITY
 
     def names(self, model: ModelView) -> tuple[str, ...]:
         if None in model.base.joint_columns("FC"):
@@ -82,21 +82,19 @@ class SmoothCoulomb(AbstractVelocityScale):
                          f"{', '.join(f'{v:.3g}' for v in np.atleast_1d(self.velocity))})")
 
 
-class Stribeck(AbstractVelocityScale):
+class Stribeck(AbstractScale):
     """``FS_j exp(-(qd_j / velocity)^2) c_j(qd)``: the friction above Coulomb's that
     a joint shows near rest and loses as it speeds up (Stribeck's curve; ``FS_j >= 0``,
     the static friction's excess), ``velocity`` the Stribeck velocity (rad/s or m/s,
     > 0: one, one per joint, or fitted), ``c_j`` the model's Coulomb shape. Its columns
     are ``FS1..``."""
 
-    velocity: float | tuple[float, ...] = eqx.field(default=STRIBECK_VELOCITY,
-                                                    converter=as_scale)
+    velocity: float | tuple[float, ...] = scale(STRIBECK_VELOCITY, bounds=VELOCITY_BOUNDS,
+                                                unit="rad/s", symbol="v_stribeck")
     fitted: bool = False
     name: ClassVar[str] = "stribeck"
     unit: ClassVar[str] = "N m for Stribeck's excess friction FS"
     nonnegative: ClassVar[bool] = True
-    symbol: ClassVar[str] = "v_stribeck"
-    default_scale: ClassVar[float] = STRIBECK_VELOCITY
 
     def names(self, model: ModelView) -> tuple[str, ...]:
         n = model.robot.n_joints

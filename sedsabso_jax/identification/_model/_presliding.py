@@ -4,11 +4,10 @@ state along each recording (:mod:`._dahl`)."""
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 from typing import Any, ClassVar
 
-import equinox as eqx
 import numpy as np
 
 from ._dahl import dahl_state
-from ._scales import AbstractScale, as_scale
+from ._scales import AbstractScale, scale
 from ._term import AbstractTerm, InSimulator, ModelView, Signals, diagonal
 
 #: Characteristic displacement (rad or m) of :class:`Presliding` unless told.
@@ -31,15 +30,16 @@ class Presliding(AbstractScale):
     Beside the Coulomb column ``FC_j sign(qd_j)``, which it equals in steady sliding, it
     adds what sliding friction does not predict: the torque held while the joint stands
     still and the gradual reversal. ``displacement`` is ``q_c`` (rad or m, > 0: one, one
-    per joint, or with ``fitted=True`` one per joint searched by the fit within
-    :attr:`bounds`, up to ``largest`` where given: ``presliding:fit:0.02`` in the
-    command line's text). The columns read each recording's samples in time order, whole: a
-    split's rows are the whole recording's, taken. ``scan``: how the state is
+    per joint, or with ``fitted=True`` one per joint searched by the fit within its
+    declared bounds, 1e-5 to 0.5 rad, up to ``largest`` where given:
+    ``presliding:fit:0.02`` in the command line's text). The columns read each
+    recording's samples in time order, whole: a split's rows are the whole recording's,
+    taken. ``scan``: how the state is
     integrated, ``"sequential"`` (a ``lax.scan``), ``"associative"`` (a prefix
     composition, parallel in time) or ``"auto"``, per backend (:data:`~._dahl.SEQUENTIAL`)."""
 
-    displacement: float | tuple[float, ...] = eqx.field(default=PRESLIDING_DISPLACEMENT,
-                                                        converter=as_scale)
+    displacement: float | tuple[float, ...] = scale(
+        PRESLIDING_DISPLACEMENT, bounds=(1e-5, 0.5), unit="rad", symbol="q_c")
     fitted: bool = False
     scan: str = "auto"
     largest: float | None = None
@@ -54,25 +54,19 @@ class Presliding(AbstractScale):
                            lost="its gradual build-up over the displacement q_c after a "
                            "reversal (a simulator's dry friction turns at once)")
     nonnegative: ClassVar[bool] = True
-    #: The displacements' search box (rad or m).
-    bounds: ClassVar[tuple[float, float]] = (1e-5, 0.5)
-    scale_name: ClassVar[str] = "displacement"
-    scale_unit: ClassVar[str] = "rad"
-    default_scale: ClassVar[float] = PRESLIDING_DISPLACEMENT
-    symbol: ClassVar[str] = "q_c"
 
     def __check_init__(self):  # equinox also runs AbstractScale's
         if self.scan not in SCANS:
             raise ValueError(f"Presliding's scan must be one of {SCANS}, got {self.scan!r}")
+        lo, hi = self.declared().bounds
         if self.largest is not None and not (
-                self.fitted and isinstance(self.largest, float)
-                and self.bounds[0] < self.largest <= self.bounds[1]):
-            raise ValueError(f"Presliding's largest must be a number in ({self.bounds[0]:g}, "
-                             f"{self.bounds[1]:g}] with fitted=True, got {self.largest!r} "
+                self.fitted and isinstance(self.largest, float) and lo < self.largest <= hi):
+            raise ValueError(f"Presliding's largest must be a number in ({lo:g}, "
+                             f"{hi:g}] with fitted=True, got {self.largest!r} "
                              f"(fitted={self.fitted!r})")
 
     def search_bounds(self) -> tuple[float, float]:
-        lo, hi = self.bounds
+        lo, hi = self.declared().bounds
         return (lo, hi) if self.largest is None else (lo, self.largest)
 
     @property
@@ -89,7 +83,7 @@ class Presliding(AbstractScale):
                 raise ValueError(f"friction term 'presliding': expected presliding:fit:LARGEST "
                                  f"(rad, the largest displacement searched), got "
                                  f"presliding:{option}") from None
-            lo, hi = cls.bounds
+            lo, hi = cls.declared().bounds
             if not lo < largest <= hi:  # NaN too
                 raise ValueError(f"friction term 'presliding': presliding:fit:LARGEST searches "
                                  f"each joint's displacement up to LARGEST rad, a number in "

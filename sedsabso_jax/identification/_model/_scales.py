@@ -1,11 +1,11 @@
-"""Terms with a scale per joint that a fit may search (:class:`AbstractScale`): of a
-velocity (:class:`AbstractVelocityScale`: :class:`~._friction.SmoothCoulomb`,
+"""Terms with a scale per joint that a fit may search (:class:`AbstractScale`, its field
+declared with :func:`scale`): of a velocity (:class:`~._friction.SmoothCoulomb`,
 :class:`~._friction.Stribeck`) or a displacement (:class:`~._presliding.Presliding`);
 the converter and check of a scale given as one number or one per joint."""
 
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 import dataclasses
-from typing import Any, ClassVar
+from typing import Any
 
 import equinox as eqx
 import jax
@@ -31,28 +31,57 @@ def check_scale(name: str, value: object) -> None:
         check_number(name, v, strict=True)
 
 
+@dataclasses.dataclass(frozen=True)
+class Declared:
+    """What a term declares of its scale (:func:`scale`): the field's ``name`` and
+    ``default``, the box a fit searches it in (``bounds``), its ``unit`` and the searched
+    values' names in reports (``{symbol}{joint}``)."""
+
+    name: str
+    default: float
+    bounds: tuple[float, float]
+    unit: str
+    symbol: str
+
+
+def scale(default: float, *, bounds: tuple[float, float], unit: str, symbol: str) -> Any:
+    """The field of an :class:`AbstractScale` that holds its scale: ``default`` (one number
+    for every joint), ``bounds`` (the box a fit searches it in), ``unit`` and ``symbol``
+    (the searched values' names in reports, ``{symbol}{joint}``)::
+
+        velocity: float | tuple[float, ...] = scale(0.02, bounds=(1e-4, 1.0),
+                                                    unit="rad/s", symbol="v_smooth")
+    """
+    return eqx.field(default=default, converter=as_scale,
+                     metadata={"scale": (tuple(float(b) for b in bounds), unit, symbol)})
+
+
 class AbstractScale(AbstractTerm):
-    """A term with a scale per joint (a velocity, a displacement): fixed (one for every
-    joint, or one per joint), or with ``fitted=True`` one per joint searched by the fit
-    from the value given, within :attr:`bounds`. A final class names its scale's field
-    (``scale_name``), its unit (``scale_unit``), its default (``default_scale``) and the
-    scales' names in reports (``{symbol}{joint}``)."""
+    """A term with a scale per joint (a velocity, a displacement), the one field it
+    declares with :func:`scale`: fixed (one for every joint, or one per joint), or with
+    ``fitted=True`` one per joint searched by the fit from the value given, within its
+    bounds (:meth:`declared`)."""
 
     fitted: eqx.AbstractVar[bool]
-    bounds: eqx.AbstractClassVar[tuple[float, float]]
-    scale_name: eqx.AbstractClassVar[str]
-    scale_unit: eqx.AbstractClassVar[str]
-    default_scale: eqx.AbstractClassVar[float]
-    symbol: eqx.AbstractClassVar[str]
+
+    @classmethod
+    def declared(cls) -> Declared:
+        """The scale field's declaration (:func:`scale`)."""
+        found = [Declared(f.name, float(f.default), *f.metadata["scale"])  # type: ignore[arg-type]
+                 for f in dataclasses.fields(cls) if "scale" in f.metadata]
+        if len(found) != 1:
+            raise TypeError(f"{cls.__name__} must declare one scale field with scale(...), "
+                            f"found {len(found)}")
+        return found[0]
 
     @property
     def scale(self) -> Any:
         """The scale as given: one number, or one per joint (traced values inside a
         compiled search)."""
-        return getattr(self, self.scale_name)
+        return getattr(self, self.declared().name)
 
     def __check_init__(self):
-        check_scale(f"{type(self).__name__}'s {self.scale_name}", self.scale)
+        check_scale(f"{type(self).__name__}'s {self.declared().name}", self.scale)
         if not isinstance(self.fitted, bool):
             raise ValueError(f"{type(self).__name__}'s fitted must be True or False, got "
                              f"{self.fitted!r}")
@@ -61,21 +90,21 @@ class AbstractScale(AbstractTerm):
         """The scale of each of ``n`` joints."""
         v = jnp.asarray(self.scale, dtype=float)
         if v.ndim and v.shape != (n,):
-            raise ValueError(f"{self.name}'s {self.scale_name} must be one number or one "
+            raise ValueError(f"{self.name}'s {self.declared().name} must be one number or one "
                              f"per joint ({n}), got {len(v)}")
         return jnp.broadcast_to(v, (n,))
 
     def search_bounds(self) -> tuple[float, float]:
-        """The box the fit searches the scales in (:attr:`bounds` unless a term narrows
-        it)."""
-        return self.bounds
+        """The box the fit searches the scales in (the declared bounds unless a term
+        narrows it)."""
+        return self.declared().bounds
 
     @property
     def text(self) -> str:
         v = self.scale
         if self.fitted:
             return f"{self.name}:fit"
-        if v != self.default_scale:
+        if v != self.declared().default:
             return f"{self.name}:" + (f"{v:g}" if isinstance(v, float)
                                       else ",".join(f"{x:g}" for x in v))
         return self.name
@@ -84,8 +113,9 @@ class AbstractScale(AbstractTerm):
     def parse(cls, option: str | None) -> AbstractTerm:
         if option is None or option == "fit":
             return cls(fitted=option == "fit")  # type: ignore[call-arg]
+        field = cls.declared()
         expected = (f"friction term {cls.name!r}: expected {cls.name}:fit or "
-                    f"{cls.name}:{cls.scale_name.upper()} ({cls.scale_unit}, one or one per "
+                    f"{cls.name}:{field.name.upper()} ({field.unit}, one or one per "
                     f"joint, comma-separated")
         try:
             values = [float(v) for v in option.split(",")]
@@ -93,7 +123,7 @@ class AbstractScale(AbstractTerm):
             raise ValueError(f"{expected}), got {cls.name}:{option}") from None
         if not all(0 < v < float("inf") for v in values):  # NaN too
             raise ValueError(f"{expected}, each > 0), got {cls.name}:{option}")
-        return cls(**{cls.scale_name: values[0] if len(values) == 1  # type: ignore[arg-type]
+        return cls(**{field.name: values[0] if len(values) == 1  # type: ignore[arg-type]
                       else tuple(values)})
 
     def nonlinear(self, model: ModelView) -> Nonlinear | None:
@@ -101,32 +131,23 @@ class AbstractScale(AbstractTerm):
             return None
         n = model.robot.n_joints
         lo, hi = self.search_bounds()
-        return Nonlinear(tuple(f"{self.symbol}{j + 1}" for j in range(n)),
+        field = self.declared()
+        return Nonlinear(tuple(f"{field.symbol}{j + 1}" for j in range(n)),
                          np.clip(np.broadcast_to(np.asarray(self.scale, float), (n,)), lo, hi),
                          np.full(n, lo),
-                         np.full(n, hi), self.scale_unit)
+                         np.full(n, hi), field.unit)
 
     def with_nonlinear(self, values: Any) -> AbstractTerm:
         if isinstance(values, jax.core.Tracer):  # a trial inside a compiled search
-            name = self.scale_name
+            name = self.declared().name
             return eqx.tree_at(lambda t: getattr(t, name), self, values)
-        scale = {self.scale_name: tuple(float(v) for v in np.asarray(values))}
+        scale = {self.declared().name: tuple(float(v) for v in np.asarray(values))}
         return dataclasses.replace(self, **scale)  # type: ignore[arg-type]
 
     def settings(self) -> dict:
         v = self.scale
-        out: dict = {f"{self.name}_{self.scale_name}": list(v) if isinstance(v, tuple) else v}
+        out: dict = {f"{self.name}_{self.declared().name}": list(v) if isinstance(v, tuple)
+                     else v}
         if self.fitted:
             out[f"{self.name}_fitted"] = True
         return out
-
-
-class AbstractVelocityScale(AbstractScale):
-    """A term with a velocity scale (rad/s or m/s): :class:`AbstractScale` of the field
-    ``velocity``."""
-
-    velocity: eqx.AbstractVar[float | tuple[float, ...]]
-    #: The scales' search box (rad/s or m/s).
-    bounds: ClassVar[tuple[float, float]] = (1e-4, 1.0)
-    scale_name: ClassVar[str] = "velocity"
-    scale_unit: ClassVar[str] = "rad/s"

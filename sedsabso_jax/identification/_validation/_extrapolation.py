@@ -3,9 +3,8 @@
 A torque model is fitted where the identification data moved: its friction terms on the
 speeds seen, its gravity and inertia terms on the positions and accelerations seen.
 Cross-validation over the motion's phase predicts the error on motions *like* the fitted
-one; on faster motions it is too optimistic (docs/results/extrapolation.md: at 1.5x the
-speed its prediction was 0.89 of the measured error, at 2x 0.74, and the real KUKA LWR4+
-showed 2x). :func:`extrapolation` measures, per joint, how far new data go beyond the
+one; on faster motions it is too optimistic (docs/results/extrapolation.md).
+:func:`extrapolation` measures, per joint, how far new data go beyond the
 fitted data, on the joint-side :class:`~sedsabso_jax.Measurements` the identification
 uses:
 
@@ -18,10 +17,9 @@ derived velocities and accelerations carry filter edge transients and single-sam
 that would set true extremes; a motion time-scaled by s still gives exactly s (and s^2).
 ``quantile=0`` uses true extremes.
 
-The thresholds (:data:`SPEED_THRESHOLD` 1.25, :data:`ACCELERATION_THRESHOLD` 1.5,
-:data:`POSITION_THRESHOLD` 0.10) lie between a repeat of the fitted motion (ratios near 1,
-nothing beyond) and the speeds where the predicted error was measured to be optimistic
-(1.5x and more)."""
+Beyond :data:`SPEED_THRESHOLD`, :data:`ACCELERATION_THRESHOLD` or
+:data:`POSITION_THRESHOLD` the held-out data are flagged (where they come from:
+docs/explanation/identification-defaults.md)."""
 
 from __future__ import annotations
 

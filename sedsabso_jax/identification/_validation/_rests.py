@@ -44,10 +44,8 @@ SLOW_SPEED = 0.1
 #: A joint is flagged where the new motion's share at rest or slow exceeds the fitted
 #: recording's by more than this (a fraction of the samples).
 SHARE_MARGIN = 0.05
-#: Edges of the bands of |qd| / fitted peak speed the validated error is weighed over,
-#: chosen on the simulation study's plants 0-2 among five sets (benchmarks.extrapolation;
-#: with an edge at 0.01 the prediction on point-to-point motions was 1.15-1.42x the
-#: error met, without edges below 0.2 0.60-0.76x).
+#: Edges of the bands of |qd| / fitted peak speed the validated error is weighed over
+#: (how they were chosen: docs/explanation/identification-defaults.md).
 SPEED_BANDS = (REST_SPEED, SLOW_SPEED, 0.3)
 #: The fewest predicted samples of a joint in a band for its own error; a band with
 #: fewer takes the next faster band's.

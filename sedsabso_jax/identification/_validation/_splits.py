@@ -8,7 +8,7 @@ the splits is the validation's score.
 - :class:`PhaseFolds`: folds of the motion's phase (:func:`~._phase.phase_folds`). Every
   fold is a stretch of the same trajectory, inside the region of joint states the others
   cover: it measures how well a model interpolates, and predicts motions like the one
-  fitted (within 11 % in the simulation study, ``benchmarks.extrapolation``).
+  fitted.
 - :class:`SpeedSplits`: for each joint, fit the samples where it moves slower than
   ``fit_below`` of its peak speed and predict those where it moves faster than
   ``predict_above``: the model must extrapolate in speed, as it must on a new motion that
@@ -17,9 +17,8 @@ the splits is the validation's score.
 - :class:`GivenFolds`: fold labels of the user's, one per sample.
 - :class:`Pooled`: the splits of several of these together. ``sedsabso-jax identify``
   chooses by ``Pooled((PhaseFolds(), SpeedSplits()))`` (leave one recording out instead
-  of the phase folds for several recordings): on the real KUKA LWR4+ it was the only
-  choice that held both on stretches of the motion and on its fastest samples
-  (``benchmarks.real_robots``).
+  of the phase folds for several recordings; why:
+  docs/explanation/identification-defaults.md).
 """
 
 from __future__ import annotations
