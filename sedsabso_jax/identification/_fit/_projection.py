@@ -147,8 +147,8 @@ class Projection(eqx.Module):
         # the validation fits unchanged on every split)
         Y0 = root.rows(model, every_column=True, cache=root.has_rows(model))
         # which columns move, and the recording's signals, once per structure of model
-        moved, recipe = root.kept("moved", model.structure, lambda: _moved(model, root, Y0))
         shared = root.kept("signals", model.structure, lambda: _signals(model, root))
+        moved, recipe = root.kept("moved", model.structure, lambda: _moved(model, Y0, shared))
         w = np.asarray(weights, dtype=float)
         A = Y0[..., ~moved] * (w[:, None] * mask[:, None, None])
         M = A.reshape(-1, A.shape[-1])
@@ -252,14 +252,16 @@ class Projection(eqx.Module):
         return (fitted - self.b).reshape(-1) * jnp.sqrt(self.b.size / self.rows)
 
 
-def _moved(model: TorqueModel, root: Samples, Y0: np.ndarray) -> tuple[np.ndarray, Recipe]:
-    """Which of ``model``'s every columns its searched parameters move, and the recipe: a
-    column moves where its derivative with respect to them is nonzero (forward mode
-    through the Coulomb shape and the terms' own columns at the start values, along one
-    fixed direction of positive weights, which no model's structure cancels); a column
-    reaches a joint's row where its value (``Y0``) or its derivative is nonzero there."""
+def _moved(model: TorqueModel, Y0: np.ndarray, shared: tuple) -> tuple[np.ndarray, Recipe]:
+    """Which of ``model``'s every columns (``Y0``, at the start values) its searched
+    parameters move, and the recipe: a column moves where its derivative with respect to
+    them is nonzero (forward mode through the Coulomb shape and the terms' own columns at
+    the start values, the recordings' signals ``shared``, along a fixed direction of
+    random positive weights: two parameters' effects on a column cancel only at an exact
+    tie); a column reaches a joint's row where its value or its derivative is nonzero
+    there."""
     u0 = np.log(np.concatenate([f.values for _, f in model.nonlinear()]))
-    q, qd, qdd, recording, steps, rigid = _signals(model, root)
+    q, qd, qdd, recording, steps, rigid = shared
 
     def columns(u):
         m = model.with_nonlinear(jnp.exp(u))
