@@ -4,6 +4,7 @@ recording."""
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 from typing import Any, ClassVar
 
+import jax.numpy as jnp
 import numpy as np
 
 from ._term import AbstractTerm, InSimulator, ModelView, Signals
@@ -28,18 +29,19 @@ class Offset(AbstractTerm):
     def columns(self, model: ModelView, s: Signals) -> Any:
         n, R, batch = model.robot.n_joints, model.recordings, s.batch
         if R == 1:
-            return np.broadcast_to(np.eye(n), batch + (n, n))
+            return jnp.broadcast_to(jnp.eye(n), batch + (n, n))
         if s.recording is None:
-            share = np.full(batch + (R,), 1.0 / R)
+            share = jnp.full(batch + (R,), 1.0 / R)
         else:
             index = np.asarray(s.recording)
             if index.shape != batch or index.dtype.kind not in "iu" or (
                     index.size and (index.min() < 0 or index.max() >= R)):
                 raise ValueError(f"recording must hold one integer in [0, {R}) per sample "
                                  f"{batch}, got shape {index.shape}")
-            share = (index[..., None] == np.arange(R)).astype(float)
-        E = np.zeros(batch + (n, n, R))  # joint j's row: its recording's indicator
-        E[..., np.arange(n), np.arange(n), :] = share[..., None, :]
+            share = jnp.asarray((index[..., None] == np.arange(R)).astype(float))
+        # joint j's row: its recording's indicator
+        E = jnp.zeros(batch + (n, n, R)).at[..., np.arange(n), np.arange(n), :].set(
+            share[..., None, :])
         return E.reshape(batch + (n, n * R))
 
     held_in_full: ClassVar[bool] = True
