@@ -188,8 +188,8 @@ BUGS = [
     ("identification/_estimators/_normal_equations.py", "            rows[:, norms == 0] = 0.0",
      "            pass", "rounding left in the columns a joint does not see (Gautier's "
      "column count)", VALIDATIONS, None),
-    ("identification/_model/_offset.py", "share = np.full(batch + (R,), 1.0 / R)",
-     "share = np.full(batch + (R,), 1.0)", "new motions get the sum of the recordings' "
+    ("identification/_model/_offset.py", "share = jnp.full(batch + (R,), 1.0 / R)",
+     "share = jnp.full(batch + (R,), 1.0)", "new motions get the sum of the recordings' "
      "offsets, not their mean", VALIDATIONS, None),
     ("identification/_estimators/_physical.py",
      "    problem.solve(solver=cp.CLARABEL)\n    return problem, parameters, p, extras",
