@@ -240,14 +240,15 @@ SMALL_CAMPAIGN = ["compare", "--suite", "bbob", "--functions", "1,21", "--dimens
                   "--algorithms", "LDWPSO,CMA_ES", "--budget", "100d"]
 
 
-def once_per_run(tmp_path_factory, worker_id: str, name: str, make) -> Path:
+def once_per_run(tmp_path_factory, name: str, make) -> Path:
     """The directory ``name`` that ``make(directory)`` filled, once in this run for all
     xdist workers: the first worker to ask makes it, the others wait for it (a file lock in
     the run's temporary directory, which the workers share)."""
     from filelock import FileLock
 
     base = tmp_path_factory.getbasetemp()
-    shared = base.parent if worker_id != "master" else base  # the run's, not older runs'
+    worker = os.environ.get("PYTEST_XDIST_WORKER")  # set in xdist's workers only
+    shared = base.parent if worker else base  # the run's, not older runs'
     out, done = shared / name, shared / f"{name}.done"
     with FileLock(str(shared / f"{name}.lock")):
         if not done.is_file():
@@ -265,7 +266,7 @@ KUKA_IDENTIFY = ("sedsabso-jax identify --robot kuka_lwr4 --data "
 
 
 @pytest.fixture(scope="session")
-def kuka_identified(tmp_path_factory, worker_id) -> tuple[dict, str, Path]:
+def kuka_identified(tmp_path_factory) -> tuple[dict, str, Path]:
     """:data:`KUKA_IDENTIFY` run by the command from the repository root, once in a run:
     ``(the JSON report, what it printed, its --out)``."""
     import contextlib
@@ -283,13 +284,13 @@ def kuka_identified(tmp_path_factory, worker_id) -> tuple[dict, str, Path]:
             assert cli.main(argv) == 0
         (out / "printed.txt").write_text(printed.getvalue(), encoding="utf-8")
 
-    out = once_per_run(tmp_path_factory, worker_id, "kuka-identified", make)
+    out = once_per_run(tmp_path_factory, "kuka-identified", make)
     return (json.loads((out / "report.json").read_text(encoding="utf-8")),
             (out / "printed.txt").read_text(encoding="utf-8"), out / "results")
 
 
 @pytest.fixture(scope="session")
-def small_campaign(tmp_path_factory, worker_id):
+def small_campaign(tmp_path_factory):
     """:data:`SMALL_CAMPAIGN` run by the command, once in a run: ``(its --out, the task
     documents, summary.json)``."""
     pytest.importorskip("cocoex")
@@ -299,7 +300,7 @@ def small_campaign(tmp_path_factory, worker_id):
     def make(campaign: Path) -> None:
         assert cli.main([*SMALL_CAMPAIGN, "--out", str(campaign / "serial")]) == 0
 
-    out = once_per_run(tmp_path_factory, worker_id, "campaign", make) / "serial"
+    out = once_per_run(tmp_path_factory, "campaign", make) / "serial"
     docs = [json.loads(p.read_text()) for p in sorted((out / "tasks").rglob("*.json"))]
     return out, docs, json.loads((out / "summary.json").read_text())
 
