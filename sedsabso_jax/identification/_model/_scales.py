@@ -5,6 +5,7 @@ the converter and check of a scale given as one number or one per joint."""
 
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 import dataclasses
+import functools
 from typing import Any
 
 import equinox as eqx
@@ -65,8 +66,9 @@ class AbstractScale(AbstractTerm):
     fitted: eqx.AbstractVar[bool]
 
     @classmethod
+    @functools.cache
     def declared(cls) -> Declared:
-        """The scale field's declaration (:func:`scale`)."""
+        """The scale field's declaration (:func:`scale`), read once per class."""
         found = [Declared(f.name, float(f.default), *f.metadata["scale"])  # type: ignore[arg-type]
                  for f in dataclasses.fields(cls) if "scale" in f.metadata]
         if len(found) != 1:
