@@ -105,14 +105,19 @@ def test_a_split_reads_the_state_of_the_whole_recording(plant):
     robot, base, data, _ = plant
     model = sj.TorqueModel.of(robot, (sj.Presliding(0.02),), base=base)
     samples = Samples(data.q, data.qd, data.qdd, data.tau)
-    whole = samples.rows(model)
     keep = np.arange(len(data.q)) % 3 != 0
-    part = samples.split(keep)
-    np.testing.assert_array_equal(part.rows(model), whole[keep])
     inner = np.arange(keep.sum()) % 2 == 0
-    np.testing.assert_array_equal(part.split(inner).rows(model), whole[keep][inner])
+    part = samples.split(keep)
+    # the splits' own rows first, before the whole's are kept (and then taken)
+    rows, inner_rows = part.rows(model), part.split(inner).rows(model)
     values = np.random.default_rng(0).standard_normal(model.dim)
-    np.testing.assert_allclose(part.predict(model, values), whole[keep] @ values)
+    predicted = part.predict(model, values)
+    whole = samples.rows(model)
+    np.testing.assert_array_equal(rows, whole[keep])
+    np.testing.assert_array_equal(inner_rows, whole[keep][inner])
+    np.testing.assert_allclose(predicted, whole[keep] @ values)
+    np.testing.assert_array_equal(model.regressor(data.q, data.qd, data.qdd, rows=keep),
+                                  whole[keep])
 
 
 def test_the_plant_is_recovered_and_validated(plant):

@@ -66,10 +66,13 @@ class Samples:
             model.base.regressor(self.q, self.qd, self.qdd)))
 
     def _rows(self, model: TorqueModel, every_column: bool) -> np.ndarray:
-        whole = None if self.whole is None else (self.whole.q, self.whole.recording)
-        return model.regressor(self.q, self.qd, self.qdd, self.recording,
-                               base_rows=self.base_rows(model), every_column=every_column,
-                               whole=whole, keep=self.mask)
+        # on the whole recordings, a split's rows taken: a state integrates along the
+        # whole, and every split's columns are computed at one shape (one compilation
+        # of each jax.numpy operation, not one per split)
+        root, mask = self.root, self.mask
+        return model.regressor(root.q, root.qd, root.qdd, root.recording,
+                               base_rows=root.base_rows(model), every_column=every_column,
+                               rows=mask)
 
     def rows(self, model: TorqueModel, every_column: bool = False, cache: bool = True
              ) -> np.ndarray:

@@ -66,7 +66,7 @@ class SmoothCoulomb(AbstractScale):
         if None in model.base.joint_columns("FC"):
             raise ValueError("the smooth Coulomb term needs every joint's Coulomb column in "
                              "the base set")
-        self.per_joint(model.robot.n_joints)
+        self.check_joints(model.robot.n_joints)
         return ()
 
     def columns(self, model: ModelView, s: Signals) -> Any:
@@ -98,7 +98,7 @@ class Stribeck(AbstractScale):
 
     def names(self, model: ModelView) -> tuple[str, ...]:
         n = model.robot.n_joints
-        self.per_joint(n)
+        self.check_joints(n)
         return tuple(f"FS{j + 1}" for j in range(n))
 
     def columns(self, model: ModelView, s: Signals) -> Any:

@@ -94,7 +94,7 @@ class Presliding(AbstractScale):
 
     def names(self, model: ModelView) -> tuple[str, ...]:
         n = model.robot.n_joints
-        self.per_joint(n)
+        self.check_joints(n)
         return tuple(f"FP{j + 1}" for j in range(n))
 
     def columns(self, model: ModelView, s: Signals) -> Any:
@@ -102,7 +102,7 @@ class Presliding(AbstractScale):
         dq, start = s.increments()
         sequential = None if self.scan == "auto" else self.scan == "sequential"
         z = dahl_state(dq, start, self.per_joint(n), sequential=sequential)
-        return diagonal(s.taken(z), n)
+        return diagonal(z, n)
 
     def settings(self) -> dict:
         out = super().settings()

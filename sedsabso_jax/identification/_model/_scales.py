@@ -88,13 +88,17 @@ class AbstractScale(AbstractTerm):
             raise ValueError(f"{type(self).__name__}'s fitted must be True or False, got "
                              f"{self.fitted!r}")
 
+    def check_joints(self, n: int) -> None:
+        """A ValueError unless the scale is one number or one per joint of ``n``."""
+        shape = np.shape(self.scale)
+        if shape and shape != (n,):
+            raise ValueError(f"{self.name}'s {self.declared().name} must be one number or one "
+                             f"per joint ({n}), got {shape[0]}")
+
     def per_joint(self, n: int) -> Any:
         """The scale of each of ``n`` joints."""
-        v = jnp.asarray(self.scale, dtype=float)
-        if v.ndim and v.shape != (n,):
-            raise ValueError(f"{self.name}'s {self.declared().name} must be one number or one "
-                             f"per joint ({n}), got {len(v)}")
-        return jnp.broadcast_to(v, (n,))
+        self.check_joints(n)
+        return jnp.broadcast_to(jnp.asarray(self.scale, dtype=float), (n,))
 
     def search_bounds(self) -> tuple[float, float]:
         """The box the fit searches the scales in (the declared bounds unless a term

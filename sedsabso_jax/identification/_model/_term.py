@@ -13,8 +13,8 @@ A term is an immutable value. It owns everything about itself:
 - the parameters that enter its columns nonlinearly (:meth:`~AbstractTerm.nonlinear`),
   their bounds and how the term reads a trial of them (:meth:`~AbstractTerm.with_nonlinear`);
 - a state along the samples, if it has one: the :class:`Signals` give each recording's
-  increments from its start (:meth:`Signals.increments`) and take a split's rows from
-  the whole recording's (:meth:`Signals.taken`);
+  increments from its start (:meth:`Signals.increments`); the signals are always the
+  whole recordings' (a validation split takes its rows of the columns);
 - what it reads of the model's own fitted values, if anything (:attr:`~AbstractTerm.waiting`,
   :meth:`~AbstractTerm.reading`): the fit gives it a first fit's values, and again each
   later fit's while it :attr:`~AbstractTerm.iterates`;
@@ -65,11 +65,9 @@ class Signals:
     read instead (the model's random states, where it finds which columns the base
     spans).
 
-    ``whole``, ``keep``: signals of a split of the samples know the samples they were
-    taken from and which (``keep``, a mask over the whole's rows; a term whose columns
-    carry a state along the samples integrates it on the whole and takes the split,
-    :meth:`taken`); ``steps``: the whole's :meth:`increments`, computed before (a
-    compiled search's)."""
+    The samples are whole recordings in time order (a validation split takes its rows of
+    the columns), so a term's state integrates along them; ``steps``: their
+    :meth:`increments`, computed before (a compiled search's)."""
 
     q: Any
     qd: Any
@@ -78,8 +76,6 @@ class Signals:
     coulomb: Any
     rigid: Any = None
     probe: np.ndarray | None = None
-    whole: "Signals | None" = None
-    keep: np.ndarray | None = None
     steps: tuple | None = None
 
     @property
@@ -100,6 +96,8 @@ class Signals:
             return self.probe
         if self.rigid is None:
             raise ValueError("these signals carry no rigid-body rows")
+        if isinstance(self.rigid, np.ndarray):  # measured rows: no copy into JAX
+            return self.rigid @ np.asarray(values, dtype=float)
         return self.rigid @ jnp.asarray(values)
 
     def increments(self) -> tuple[np.ndarray, np.ndarray]:
@@ -108,12 +106,7 @@ class Signals:
         (``(T,)``), over the whole recordings (time order)."""
         if self.steps is not None:
             return self.steps
-        source = self if self.whole is None else self.whole
-        return increments(np.asarray(source.q), source.recording)
-
-    def taken(self, values: Any) -> Any:
-        """``values`` of the whole recordings (``(T, ...)``) at these signals' samples."""
-        return values if self.keep is None else values[self.keep]
+        return increments(np.asarray(self.q), self.recording)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

@@ -33,7 +33,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import ArrayLike, Float, Int
+from jaxtyping import ArrayLike, Bool, Float, Int
 
 from ...dynamics._base_parameters import BaseParameters, base_parameters
 from ...dynamics._robot import Robot
@@ -279,53 +279,55 @@ class TorqueModel(eqx.Module):
             start += size
         return np.concatenate(out)
 
-    def signals(self, q, qd, qdd, recording=None, base_rows=None, *, probe=None, whole=None,
-                keep=None, steps=None) -> Signals:
+    def signals(self, q, qd, qdd, recording=None, base_rows=None, *, probe=None,
+                steps=None) -> Signals:
         """What the terms' columns read at these samples (:class:`~._term.Signals`):
         the model's Coulomb shape; ``base_rows`` the base regressor
         (the rigid-body rows are its columns but friction, then the columns of the terms
-        that are bodies); ``whole`` and ``keep``: these samples are ``keep`` of the whole
-        recordings ``(q, recording)``; ``steps``: the whole's increments."""
+        that are bodies); ``steps``: the samples' increments, computed before."""
         coulomb, _ = self.coulomb(qd)
-        whole_signals = None if whole is None else Signals(
-            whole[0], whole[0], whole[0], whole[1], None)
-        s = Signals(q, qd, qdd, recording, coulomb, None, probe, whole_signals, keep, steps)
+        s = Signals(q, qd, qdd, recording, coulomb, None, probe, steps)
         if base_rows is None:
             return s
+        rigid = base_rows[..., self.rigid_columns]
         bodies = [term.columns(self, s) for term in self.terms if term.body]
-        rigid = jnp.concatenate([base_rows[..., self.rigid_columns], *bodies], -1) \
-            if bodies else base_rows[..., self.rigid_columns]
+        if bodies:
+            rigid = jnp.concatenate([rigid, *bodies], -1)
         return dataclasses.replace(s, rigid=rigid)
 
     def _full_regressor(self, q, qd, qdd, recording=None, base_rows=None, probe=None,
-                        whole=None, keep=None) -> np.ndarray:
+                        rows=None) -> np.ndarray:
         q, qd, qdd = (np.asarray(a, dtype=float) for a in (q, qd, qdd))
         Y = np.asarray(self.base.regressor(q, qd, qdd) if base_rows is None else base_rows)
         n = self.robot.n_joints
         batch = Y.shape[:-2]
         q, qd, qdd = (np.broadcast_to(a, batch + (n,)) for a in (q, qd, qdd))
-        s = self.signals(q, qd, qdd, recording, Y, probe=probe, whole=whole, keep=keep)
-        if self.coulomb(qd)[1]:  # a term reshapes the Coulomb columns
+        s = self.signals(q, qd, qdd, recording, Y, probe=probe)
+        take = (lambda a: a) if rows is None else (lambda a: a[rows])
+        Y = take(Y)
+        coulomb, reshaped = self.coulomb(qd[:1])
+        if reshaped:  # a term reshapes the Coulomb columns
             Y = Y.copy()
             fc = np.array(self.base.joint_columns("FC"))
-            Y[..., np.arange(n), fc] = np.asarray(s.coulomb)
-        extra = [np.asarray(term.columns(self, s)) for term in self.terms]
+            Y[..., np.arange(n), fc] = take(np.asarray(s.coulomb))
+        extra = [take(np.asarray(term.columns(self, s))) for term in self.terms]
         return np.concatenate([Y, *extra], -1)
 
     def regressor(self, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
                   qdd: Float[ArrayLike, "*batch n"],
                   recording: Int[ArrayLike, "*batch"] | None = None, *,
                   base_rows: Float[ArrayLike, "*batch n b"] | None = None,
-                  every_column: bool = False, whole: tuple | None = None,
-                  keep: np.ndarray | None = None) -> Float[np.ndarray, "*batch n d"]:
+                  every_column: bool = False, rows: Bool[ArrayLike, " T"] | None = None
+                  ) -> Float[np.ndarray, "*batch n d"]:
         """``(..., n, dim)``: the base columns, then the identifiable extra columns;
         ``recording``: the recording of each sample (one offset per recording; the
         recordings a state restarts at); None: one recording, or a new motion (the
         offsets' mean); ``base_rows``: the base regressor at these samples when already
         computed; ``every_column``: also the extra columns the base regressor spans;
-        ``whole``, ``keep``: these samples are the rows the mask ``keep`` selects of the
-        whole recordings ``(q, recording)`` (a state is integrated along the whole)."""
-        Y = self._full_regressor(q, qd, qdd, recording, base_rows, whole=whole, keep=keep)
+        ``rows``: only the rows of the samples (``(T,)`` mask) this selects. A term with a
+        state integrates it along all the samples (in time order within each
+        recording)."""
+        Y = self._full_regressor(q, qd, qdd, recording, base_rows, rows=rows)
         if every_column:
             return Y
         keep_columns = np.r_[np.arange(self.base.rank), self.base.rank + self._kept]
