@@ -183,7 +183,9 @@ class SharedDrag(sj.identification.AbstractScale):
 MODELS = {"presliding:fit": lambda: parse_friction("presliding:fit"),
           "offset+smooth:fit+stribeck:0.05": lambda: parse_friction(
               "offset+smooth:fit+stribeck:0.05"),
-          "a column on every row": lambda: (SharedDrag(),)}
+          "a column on every row": lambda: (SharedDrag(),),
+          # IA1, IA2 the base regressor spans (regrouped): not in the fixed block
+          "armature+presliding:fit": lambda: parse_friction("armature+presliding:fit")}
 
 
 @pytest.mark.parametrize("friction", list(MODELS))
@@ -194,7 +196,8 @@ def test_the_search_problem_is_the_least_squares_fit(plant, friction):
     population it is the loss of each; the mean square of its residual is its loss, and
     the residual's Jacobian (forward mode through the columns) matches central
     differences. A state's displacements, and a Coulomb shape that moves the Coulomb
-    columns and the Stribeck columns that read it, alike."""
+    columns and the Stribeck columns that read it, alike; and beside columns the base
+    regressor spans (an exact dependency among the columns no trial moves)."""
     robot, base, data, _ = plant
     samples = Samples(data.q, data.qd, data.qdd, data.tau)
     model = sj.TorqueModel.of(robot, MODELS[friction](), base=base)

@@ -582,6 +582,9 @@ BUGS = [
     ("identification/_fit/_projection.py", "            derivative[:, j, c] = d_coulomb[:, j]\n",
      "            pass\n", "the Coulomb columns a searched Coulomb shape moves taken as "
      "unmoved by the search", STATE, None),
+    ("identification/_fit/_projection.py", "    return ~moved & model.kept\n",
+     "    return ~moved\n", "the columns the base regressor spans kept among the search's "
+     "fixed columns (a singular Gram matrix inverted)", STATE, None),
 ]
 
 

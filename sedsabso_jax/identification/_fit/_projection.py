@@ -5,7 +5,8 @@ trial of the nonlinear ones.
 
 A model is linear in every value but the few parameters ``u`` (log scale) its terms
 search (:meth:`~sedsabso_jax.TorqueModel.nonlinear`). Its columns split in two: those no
-trial moves (``A``, their normal equations formed once) and those a trial moves (``C(u)``,
+trial moves (``A``, the ones the model fits, their normal equations formed once,
+:func:`fixed`) and those a trial moves (``C(u)``,
 those whose derivative in ``u`` is nonzero, by forward mode through the terms' own code:
 a term's own columns, the Coulomb columns a Coulomb shape reshapes, and the columns that
 read that shape). A moved column is nonzero on few joints'
@@ -150,7 +151,7 @@ class Projection(eqx.Module):
         shared = root.kept("signals", model.structure, lambda: _signals(model, root))
         moved, recipe = root.kept("moved", model.structure, lambda: _moved(model, Y0, shared))
         w = np.asarray(weights, dtype=float)
-        A = Y0[..., ~moved] * (w[:, None] * mask[:, None, None])
+        A = Y0[..., fixed(model, moved)] * (w[:, None] * mask[:, None, None])
         M = A.reshape(-1, A.shape[-1])
         scale = np.linalg.norm(M, axis=0)
         scale = np.where(scale > 0, scale, 1.0)
@@ -282,6 +283,16 @@ def _moved(model: TorqueModel, Y0: np.ndarray, shared: tuple) -> tuple[np.ndarra
     return moved, _recipe(model, moved, (Y0 != 0) | derivative)
 
 
+def fixed(model: TorqueModel, moved: np.ndarray) -> np.ndarray:
+    """The columns no trial moves that the model fits (``A``): not ``moved``, and not
+    spanned by the base regressor (:attr:`~sedsabso_jax.TorqueModel.kept`). A spanned
+    column would add nothing to ``A``'s range but an exact dependency: its inverse Gram
+    matrix would then grow to ``1 / RIDGE`` along it and carry the rounding of ``A^T C``
+    into the loss (on the TX40's motor side, jumps of 5e-8 of the loss that kept
+    Newton's method from converging)."""
+    return ~moved & model.kept
+
+
 def _signals(model: TorqueModel, root: Samples) -> tuple:
     """The whole recordings' signals a trial's columns read, as JAX arrays: positions,
     velocities, accelerations, recordings, increments, rigid-body rows."""
@@ -316,7 +327,7 @@ def _recipe(model: TorqueModel, moved: np.ndarray, nonzero: np.ndarray) -> Recip
             for j in np.flatnonzero(np.any(nonzero[:, :, e], axis=0)):
                 pair_column.append(m)
                 pair_joint.append(int(j))
-    on_row = np.any(nonzero[:, :, ~moved], axis=0)  # (n, unmoved columns)
+    on_row = np.any(nonzero[:, :, fixed(model, moved)], axis=0)  # (n, unmoved columns)
     rows = tuple((j, tuple(int(c) for c in np.flatnonzero(on_row[j])))
                  for j in range(model.robot.n_joints))
     return Recipe(model, coulomb, tuple(terms), tuple(pair_column), tuple(pair_joint),

@@ -204,25 +204,30 @@ class TorqueModel(eqx.Module):
         return tree_key((self.base, self.terms, self.transmission, self.recordings))
 
     @functools.cached_property
-    def _kept(self) -> np.ndarray:
-        """Indices of the extra columns that the base regressor does not span."""
-        return kept_columns(self)
+    def kept(self) -> np.ndarray:
+        """Which of the model's every columns (:meth:`regressor` with ``every_column``) it
+        fits: the base columns and the extra columns the base regressor does not span
+        (booleans)."""
+        out = np.zeros(self.base.rank + len(self._extra_names()), dtype=bool)
+        out[:self.base.rank] = True
+        out[self.base.rank + kept_columns(self)] = True
+        return out
 
     @property
     def regrouped(self) -> tuple[str, ...]:
         """Extra columns dropped because the base regressor spans them."""
-        names = self._extra_names()
-        kept = set(self._kept.tolist())
-        return tuple(n for i, n in enumerate(names) if i not in kept)
+        extra = self._extra_names()
+        return tuple(n for n, k in zip(extra, self.kept[self.base.rank:]) if not k)
 
     @functools.cached_property
     def names(self) -> tuple[str, ...]:
-        extra = self._extra_names()
-        return tuple(self.base.names) + tuple(extra[i] for i in self._kept)
+        kept = self.kept[self.base.rank:]
+        return tuple(self.base.names) + tuple(n for n, k in zip(self._extra_names(), kept) if k)
 
     def _per_column(self, answer) -> np.ndarray:
         extra = [answer(term) for term in self.terms for _ in term.names(self)]
-        return np.array([False] * self.base.rank + [extra[i] for i in self._kept], dtype=bool)
+        kept = self.kept[self.base.rank:]
+        return np.array([False] * self.base.rank + [e for e, k in zip(extra, kept) if k], bool)
 
     @functools.cached_property
     def nonnegative(self) -> np.ndarray:
@@ -269,7 +274,8 @@ class TorqueModel(eqx.Module):
         (0 for one that regroups), in :meth:`signals`' ``rigid`` order."""
         values = np.asarray(values, dtype=float)
         out = [values[self.rigid_columns]]
-        position = {int(e): self.base.rank + i for i, e in enumerate(self._kept)}
+        extra = np.flatnonzero(self.kept[self.base.rank:])
+        position = {int(e): self.base.rank + i for i, e in enumerate(extra)}
         start = 0
         for term in self.terms:
             size = len(term.names(self))
@@ -330,8 +336,7 @@ class TorqueModel(eqx.Module):
         Y = self._full_regressor(q, qd, qdd, recording, base_rows, rows=rows)
         if every_column:
             return Y
-        keep_columns = np.r_[np.arange(self.base.rank), self.base.rank + self._kept]
-        return Y[..., keep_columns] if len(keep_columns) < Y.shape[-1] else Y
+        return Y if self.kept.all() else Y[..., self.kept]
 
     def predict(self, values: Float[ArrayLike, " d"], q: Float[ArrayLike, "*batch n"],
                 qd: Float[ArrayLike, "*batch n"], qdd: Float[ArrayLike, "*batch n"],
