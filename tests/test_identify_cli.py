@@ -81,7 +81,7 @@ def test_rs010n_noise_free_recovers_the_true_parameters(rs010n_files, tmp_path, 
 def test_kuka_real_data_end_to_end(kuka_identified):
     """The real KUKA LWR4+ runs (``KUKA_IDENTIFY``, conftest; the run the docs quote): the
     default method identifies on run 1 and validates on run 2; the JSON has the documented
-    keys, the model chosen by the pooled phase folds and speed splits on run 1 (30
+    keys (how the signals were obtained among them), the model chosen by the pooled phase folds and speed splits on run 1 (30
     candidates: 15 unconstrained, 15 physically consistent, then friction at rest added to
     the choice and kept: not worse by more than one standard error) is the physically
     consistent OLS fit with offset, smooth Coulomb friction, friction growing with the load
@@ -89,8 +89,14 @@ def test_kuka_real_data_end_to_end(kuka_identified):
     (measured 0.1450 %; plain OLS with Coulomb + viscous friction gives 0.217 % on slices of
     these runs, outside the band); the report's figures are written."""
     doc, printed, out = kuka_identified
-    assert set(doc) == {"base_parameters", "fit", "validation", "settings",
+    assert set(doc) == {"base_parameters", "fit", "validation", "settings", "signals",
                         "cross_validation", "extrapolation", "rests", "validations", "mujoco"}
+    # the shipped file's velocities and accelerations are the logger's: nothing derived
+    assert doc["signals"]["info"]["accelerations"] == "recorded"
+    assert doc["signals"]["description"].startswith(
+        "positions, velocities, accelerations and torques as recorded; torques and "
+        "positions taken as simultaneous (no delay). This is the measurement's")
+    assert "signals: positions, velocities, accelerations and torques" in printed
     assert len(doc["base_parameters"]["names"]) == len(doc["base_parameters"]["values"])
     val = doc["validation"]
     assert len(val["nrms_range_percent"]) == len(val["relative_rms_percent"]) == 7

@@ -243,6 +243,31 @@ def test_derive_filter_downsample_options(tmp_path):
             load_measurements(path, downsample=bad)
 
 
+def test_how_the_signals_were_obtained_is_said(tmp_path):
+    """A report's words on the signal chain follow the loader's record: what was
+    recorded, what derived and with which cutoff, the torques' filter, the trimmed ends,
+    the downsampling; several recordings each where they differ; no record said so."""
+    from sedsabso_jax.identification._recordings import joined
+    from sedsabso_jax.measurements import describe_signals
+
+    path = write_npz(tmp_path / "m.npz", **small(T=400))
+    plain = describe_signals(load_measurements(path).info)
+    assert plain == ("positions, velocities, accelerations and torques as recorded; "
+                     "torques and positions taken as simultaneous (no delay)")
+    derived = load_measurements(path, derive=True, cutoff_hz=5.0, filter_torques=True,
+                                downsample=2)
+    said = describe_signals(derived.info)
+    assert said.startswith("positions as recorded; velocities and accelerations derived "
+                           "from the positions (zero-phase Butterworth low-pass, order 4, "
+                           "at 5 Hz")
+    assert "torques low-passed alike, at 5 Hz; 0.4 s trimmed" in said
+    assert "downsampled 2x" in said and "torques as recorded" not in said
+    both = describe_signals(joined([load_measurements(path), derived]).info)
+    assert both.startswith("recording 1 (positions, velocities") and "recording 2 (" in both
+    assert describe_signals(joined([derived, derived]).info) == said
+    assert describe_signals({}).startswith("as given (no record")
+
+
 # --------------------------------------------------------------------------------------
 # file round trips
 

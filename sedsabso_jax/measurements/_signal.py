@@ -115,3 +115,46 @@ def differentiate(times: Float[ArrayLike, " T"], q: Float[ArrayLike, "T n"],
                              f"(the low-passed time stamps are not increasing)")
     qd = np.gradient(q, times, axis=0)
     return qd, np.gradient(qd, times, axis=0)
+
+
+def describe_signals(info: dict | None) -> str:
+    """How a recording's signals were obtained, in words, from its
+    :attr:`~sedsabso_jax.Measurements.info` (:func:`~._load.load_measurements`'s record;
+    several recordings joined: each one's, the same said once): which signals were
+    recorded and which derived, the low-pass and its cutoff, the seconds trimmed at each
+    end, the resampling and downsampling. A time shift between the torques and the
+    positions is never applied (they are taken as simultaneous)."""
+    return _chain(info) + "; torques and positions taken as simultaneous (no delay)"
+
+
+def _chain(info: dict | None) -> str:
+    if not info:
+        return "as given (no record of how they were obtained)"
+    if "recordings" in info:
+        said = [_chain(r) for r in info["recordings"]]
+        return said[0] if len(set(said)) == 1 else "; ".join(
+            f"recording {k + 1} ({s})" for k, s in enumerate(said))
+    derived = [k for k in ("velocities", "accelerations")
+               if str(info.get(k, "recorded")).startswith("derived")]
+    filtered = "low-passed" in str(info.get("torques", ""))
+    recorded = ["positions", *(k for k in ("velocities", "accelerations") if k not in derived),
+                *([] if filtered else ["torques"])]
+    parts = [", ".join(recorded[:-1]) + f" and {recorded[-1]} as recorded"
+             if len(recorded) > 1 else "positions as recorded"]
+    cutoff = info.get("cutoff_hz")
+    at = "" if cutoff is None else f", at {cutoff:g} Hz"
+    if derived:
+        parts.append(f"{' and '.join(derived)} derived from the positions (zero-phase "
+                     f"Butterworth low-pass, order {BUTTERWORTH_ORDER}{at}, then central "
+                     f"differences)")
+    if filtered:
+        parts.append(f"torques low-passed alike{at}")
+    if info.get("trimmed_s"):
+        parts.append(f"{info['trimmed_s']:g} s trimmed at each end (the filter's ringing)")
+    if info.get("resampled_hz"):
+        parts.append(f"resampled to {info['resampled_hz']:g} Hz")
+    if (info.get("downsample") or 1) > 1:
+        parts.append(f"downsampled {info['downsample']}x")
+    if info.get("transmission"):
+        parts.append("converted to the joint side through the transmission")
+    return "; ".join(parts)

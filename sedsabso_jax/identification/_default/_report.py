@@ -22,6 +22,7 @@ from ..._output import (
     write_text,
 )
 from ...measurements._container import Measurements
+from ...measurements._signal import describe_signals
 from .._estimators._estimator import Limits
 from .._fit._identify import Identification
 from .._fit._rollouts import figure_rollouts
@@ -223,7 +224,7 @@ class IdentificationReport:
                 in enumerate(zip(ident.names, ident.values, std, relative), 1)]
         lines = [f"{robot.name}: {len(ident.names)} parameters identified by {ident.method} "
                  f"(friction {ident.model.friction}) from {self.data.n_samples} samples of "
-                 f"{self.data.source}", "",
+                 f"{self.data.source}", "", f"signals: {self.signals}", "",
                  markdown_table(["#", "parameter", "value", "std", "relative std [%]"], rows),
                  "", columns_note(
                      ("#", "row number"),
@@ -298,6 +299,14 @@ class IdentificationReport:
             lines += ["", "NRMS over torque limits: no limits known for this robot"]
         return "\n".join(lines)
 
+    @property
+    def signals(self) -> str:
+        """How the identification data's signals were obtained, in words
+        (:func:`~sedsabso_jax.measurements.describe_signals`), and that the written model
+        carries none of it."""
+        return (f"{describe_signals(self.data.info)}. This is the measurement's, not the "
+                f"robot's: the identified model, URDF and MJCF carry none of it")
+
     def document(self, settings: dict) -> dict:
         """The JSON document: parameters, fit and validation metrics, ``settings`` merged
         with the identification's own."""
@@ -314,6 +323,7 @@ class IdentificationReport:
                 "prior_strength": None if self.prior_selection is None
                 else self.prior_selection.as_dict()},
             "settings": {**settings, **ident.settings},
+            "signals": {"description": self.signals, "info": self.data.info},
             "extrapolation": None if self.extrapolation is None
             else self.extrapolation.as_dict(),
             "rests": None if self.rests is None else self.rests.as_dict(),
