@@ -585,6 +585,12 @@ BUGS = [
     ("identification/_fit/_projection.py", "    return ~moved & model.kept\n",
      "    return ~moved\n", "the columns the base regressor spans kept among the search's "
      "fixed columns (a singular Gram matrix inverted)", STATE, None),
+    ("identification/_fit/_delay.py", "            vertex += 0.5 * (down - up) / curvature\n",
+     "            pass\n", "the delay rounded to whole samples (no parabola's vertex)",
+     ["tests/test_delay.py"], None),
+    ("identification/_fit/_delay.py", "        b = (samples.tau[rows + k] * w).reshape(-1)\n",
+     "        b = (samples.tau[rows - k] * w).reshape(-1)\n", "the delay's sign turned",
+     ["tests/test_delay.py"], None),
 ]
 
 

@@ -50,6 +50,9 @@ from ._estimators._estimator import EstimatorFit as EstimatorFit
 from ._estimators._estimator import FitProblem as FitProblem
 from ._estimators._estimator import weigh as weigh
 from ._estimators._least_squares import AbstractLeastSquares as AbstractLeastSquares
+from ._fit._delay import LARGEST_DELAY_S as LARGEST_DELAY_S
+from ._fit._delay import DelayEstimate as DelayEstimate
+from ._fit._delay import estimate_delay as estimate_delay
 from ._fit._fit import SETTLE_RTOL as SETTLE_RTOL
 from ._fit._fit import Fitted as Fitted
 from ._fit._output_error import OutputError as OutputError
@@ -123,4 +126,5 @@ __all__ = [
     "CALIBRATED_STD", "KeptTerms", "KEPT_TERMS", "rests", "Rests", "HeldOut", "mean_metrics",
     "InSimulator", "Simulated", "simulated", "held_frictions", "mujoco_torques",
     "SimulatorCheck", "rollout_errors", "RolloutErrors", "OutputError", "Refined", "refine",
+    "estimate_delay", "DelayEstimate", "LARGEST_DELAY_S",
 ]

@@ -1,7 +1,8 @@
 """Joint measurements beyond the package root's names (``Measurements``,
 ``load_measurements``, ``load_kuka_lwr4``, ``simulate_measurements``,
 ``simulate_measurements_along``, ``Transmission``): the signal processing the loaders
-use and their record in words, and the transmission's coupled motors. Builds on :mod:`sedsabso_jax.dynamics` only."""
+use, their record in words, and the transmission's coupled motors. Builds on
+:mod:`sedsabso_jax.dynamics` only."""
 
 from __future__ import annotations
 

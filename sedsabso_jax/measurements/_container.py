@@ -188,6 +188,31 @@ class Measurements(eqx.Module):
         k = positive_int("downsample factor k", k)
         return self._with(slice(None, None, k), f"downsample {k}")
 
+    def delayed(self, seconds: float) -> Measurements:
+        """The torques taken ``seconds`` later than the motion they answer: ``tau'(t) =
+        tau(t + seconds)`` (linear interpolation between samples), at the samples whose
+        ``t + seconds`` lies within the recording (the others dropped). Positive: the
+        torque signal lags the positions (a bus, a filter, a current loop on the torques);
+        negative: the positions lag. ``info["delay_s"]`` adds it up
+        (:func:`~sedsabso_jax.identification.estimate_delay` finds it)."""
+        try:
+            d = float(seconds)
+        except (TypeError, ValueError):
+            d = float("nan")
+        if not np.isfinite(d):
+            raise ValueError(f"{self.source}: the delay must be a finite number of seconds, "
+                             f"got {seconds!r}")
+        t = self.times
+        keep = (t + d >= t[0]) & (t + d <= t[-1])
+        if keep.sum() < 2:
+            raise ValueError(f"{self.source}: a delay of {d:g} s leaves fewer than 2 samples "
+                             f"of the {self.duration:g} s recording")
+        tau = np.column_stack([np.interp(t[keep] + d, t, self.tau[:, j])
+                               for j in range(self.n_joints)])
+        info = dict(self.info, delay_s=float(self.info.get("delay_s", 0.0)) + d)
+        return Measurements(t[keep], self.q[keep], self.qd[keep], self.qdd[keep], tau,
+                            source=self.source, info=info)
+
     def arrays(self) -> dict[str, np.ndarray]:
         """The arrays under the ``.npz`` key names (:data:`._formats.NPZ_KEYS`)."""
         return {"times": self.times, "positions": self.q, "velocities": self.qd,

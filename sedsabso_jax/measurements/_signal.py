@@ -122,9 +122,15 @@ def describe_signals(info: dict | None) -> str:
     :attr:`~sedsabso_jax.Measurements.info` (:func:`~._load.load_measurements`'s record;
     several recordings joined: each one's, the same said once): which signals were
     recorded and which derived, the low-pass and its cutoff, the seconds trimmed at each
-    end, the resampling and downsampling. A time shift between the torques and the
-    positions is never applied (they are taken as simultaneous)."""
-    return _chain(info) + "; torques and positions taken as simultaneous (no delay)"
+    end, the resampling and downsampling, and a delay of the torques behind the positions
+    where one was applied (:meth:`~sedsabso_jax.Measurements.delayed`)."""
+    delays = {float(r.get("delay_s", 0.0)) for r in info.get("recordings", [info])} \
+        if info else {0.0}
+    if delays == {0.0}:
+        return _chain(info) + "; torques and positions taken as simultaneous (no delay)"
+    said = ", ".join(f"{1e3 * d:.3g} ms" for d in sorted(delays))
+    return _chain(info) + f"; torques taken {said} after the positions they answer " \
+                          f"(Measurements.delayed)"
 
 
 def _chain(info: dict | None) -> str:

@@ -1,0 +1,100 @@
+"""The time shift between the torques and the motion (:func:`estimate_delay`): the delay
+``d`` at which the torques ``tau(t + d)`` are best explained by a torque model at the
+motion ``(q, qd, qdd)(t)``, one per robot, in seconds (sub-sample).
+
+A bus, a filter or a current loop can put the torque signal behind the positions (or
+ahead of them: a position filter), by amounts that differ per robot and whose sign
+differs between robots. The model is linear in its values, so for each trial shift the
+fit is a projection of the shifted torques on the regressor's columns: the regressor is
+computed and orthonormalised once (pivoted QR, the columns the data determine), each
+trial costs one product. The trials are every whole-sample shift within
+``+-largest_s`` (the torques at other samples, exact), the delay the vertex of the
+parabola through the best one and its two neighbours (sub-sample), all on the samples
+every trial has (``ceil(largest_s * rate) + 1`` dropped at each recording's ends).
+Apply it with :meth:`~sedsabso_jax.Measurements.delayed`.
+
+The delay is confounded with what the model leaves out: a presliding state lags the
+velocity much as a delay does, so estimate it with the model the fit will use and judge
+it on held-out data (what it did on the shipped robots: docs/explanation/
+identification-defaults.md, "A delay between torques and positions"). The default
+identification does not search it yet.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import scipy.linalg
+
+from ...dynamics._robot import Robot
+from .._estimators._estimator import Limits, per_joint
+from .._model._offset import Offset
+from .._model._torque_model import TorqueModel
+from .._recordings import Data
+from ._samples import recorded
+
+#: The largest delay tried by default [s], either sign.
+LARGEST_DELAY_S = 0.02
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class DelayEstimate:
+    """What :func:`estimate_delay` found: the delay in ``seconds`` (positive: the torques
+    lag the motion) and in ``samples``; ``shifts`` (whole samples) and ``losses`` (the
+    weighted mean square residual at each); ``at_bound``: the best whole-sample shift is
+    the largest tried (the delay may lie beyond: widen ``largest_s``)."""
+
+    seconds: float
+    samples: float
+    shifts: np.ndarray
+    losses: np.ndarray
+    at_bound: bool
+
+    def as_dict(self) -> dict:
+        return {"seconds": self.seconds, "samples": self.samples,
+                "shifts": self.shifts.tolist(), "losses": self.losses.tolist(),
+                "at_bound": self.at_bound}
+
+
+def estimate_delay(robot: Robot, data: Data, model: TorqueModel | None = None, *,
+                   largest_s: float = LARGEST_DELAY_S, limits: Limits = None
+                   ) -> DelayEstimate:
+    """The delay of the torques behind the motion in ``data`` (module docstring) for
+    ``model`` (None: the base regressor's rigid body, viscous and Coulomb friction and a
+    torque offset), trying whole-sample shifts up to ``largest_s`` seconds either way;
+    each joint's rows weighted by ``1 / limits`` (None: equally). Several recordings share
+    one delay."""
+    largest = float(largest_s)
+    if not (np.isfinite(largest) and largest > 0):
+        raise ValueError(f"largest_s must be a number of seconds > 0, got {largest_s!r}")
+    recordings, samples = recorded(robot, data)
+    model = TorqueModel.of(robot, [Offset()]) if model is None else model
+    rate = float(np.median([r.rate for r in recordings]))
+    m = int(np.ceil(largest * rate))
+    if any(r.n_samples <= 2 * (m + 1) for r in recordings):
+        raise ValueError(f"a delay of up to {largest:g} s ({m} samples) needs recordings of "
+                         f"more than {2 * (m + 1)} samples")
+    starts = np.cumsum([0] + [r.n_samples for r in recordings])
+    rows = np.concatenate([np.arange(a + m + 1, b - m - 1) for a, b in zip(starts, starts[1:])])
+    n = robot.n_joints
+    given = per_joint("limits", limits, n)
+    w = np.ones(n) if given is None else 1.0 / np.asarray(given, dtype=float)
+    Y = (samples.rows(model)[rows] * w[:, None]).reshape(-1, model.dim)
+    Q, R, _ = scipy.linalg.qr(Y, mode="economic", pivoting=True)
+    diag = np.abs(np.diag(R))
+    Q = Q[:, :int(np.sum(diag > diag[0] * max(Y.shape) * np.finfo(float).eps))]
+    shifts = np.arange(-m, m + 1)
+    losses = np.empty(shifts.size)
+    for i, k in enumerate(shifts):
+        b = (samples.tau[rows + k] * w).reshape(-1)
+        losses[i] = (b @ b - np.sum((Q.T @ b) ** 2)) / b.size
+    best = int(np.argmin(losses))
+    vertex = float(shifts[best])
+    if 0 < best < shifts.size - 1:
+        down, here, up = losses[best - 1:best + 2]
+        curvature = down - 2 * here + up
+        if curvature > 0:
+            vertex += 0.5 * (down - up) / curvature
+    return DelayEstimate(vertex / rate, vertex, shifts, losses,
+                         best in (0, shifts.size - 1))
