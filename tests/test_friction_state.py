@@ -120,6 +120,17 @@ def test_a_split_reads_the_state_of_the_whole_recording(plant):
                                   whole[keep])
 
 
+def test_one_sample_has_the_rows_of_many(plant):
+    """A single sample ``(n,)`` gets the row a batch gives it, with a Coulomb shape of
+    one scale per joint too."""
+    robot, base, data, _ = plant
+    model = sj.TorqueModel.of(robot, (sj.SmoothCoulomb(velocity=(0.01, 0.02, 0.03)),
+                                      sj.Offset()), base=base)
+    many = model.regressor(data.q[:5], data.qd[:5], data.qdd[:5])
+    np.testing.assert_allclose(model.regressor(data.q[3], data.qd[3], data.qdd[3]), many[3],
+                               rtol=1e-12, atol=1e-12)
+
+
 def test_the_plant_is_recovered_and_validated(plant):
     """presliding:fit on the plant: each displacement q_c and coefficient FP within 10 %
     (the displacements' standard deviations covering the error), and the phase folds

@@ -311,8 +311,7 @@ class TorqueModel(eqx.Module):
         s = self.signals(q, qd, qdd, recording, Y, probe=probe)
         take = (lambda a: a) if rows is None else (lambda a: a[rows])
         Y = take(Y)
-        coulomb, reshaped = self.coulomb(qd[:1])
-        if reshaped:  # a term reshapes the Coulomb columns
+        if self.coulomb(np.zeros((1, n)))[1]:  # a term reshapes the Coulomb columns
             Y = Y.copy()
             fc = np.array(self.base.joint_columns("FC"))
             Y[..., np.arange(n), fc] = take(np.asarray(s.coulomb))
