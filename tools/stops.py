@@ -71,7 +71,6 @@ def main(argv: list[str] | None = None) -> int:
 
         jax.config.update("jax_enable_x64", True)
         import sedsabso_jax as sj
-
         from sedsabso_jax.measurements._load import load_kuka_lwr4
 
         robot, data = sj.robots.load("kuka_lwr4"), load_kuka_lwr4(1)
