@@ -41,7 +41,9 @@ def main() -> None:
                         fit = sj.identify(robot, data.delayed(d), sj.OLS(), model,
                                           limits=limits.torque_limits)
                         h = run.delayed(d)
-                        held[i] = f"{sj.validation_metrics(h.tau, fit.predict(h.q, h.qd, h.qdd), limits.torque_limits).nrms_limits_percent:.4f}"  # noqa: E501
+                        error = sj.validation_metrics(h.tau, fit.predict(h.q, h.qd, h.qdd),
+                                                      limits.torque_limits)
+                        held[i] = f"{error.nrms_limits_percent:.4f}"
                 print(f"| {name} | {friction} | {1e3 * found.seconds:.2f} | "
                       f"{found.samples:.2f}{' (at bound)' if found.at_bound else ''} | "
                       f"{held[0]} | {held[1]} |", flush=True)

@@ -265,6 +265,13 @@ def test_how_the_signals_were_obtained_is_said(tmp_path):
     both = describe_signals(joined([load_measurements(path), derived]).info)
     assert both.startswith("recording 1 (positions, velocities") and "recording 2 (" in both
     assert describe_signals(joined([derived, derived]).info) == said
+    # a delay, of one recording or of several re-timed together, is said
+    late = derived.delayed(0.02)
+    assert describe_signals(late.info).endswith("torques taken 20 ms after the positions "
+                                                "they answer (Measurements.delayed)")
+    assert "torques taken 20 ms" in describe_signals(joined([late, late]).info)
+    assert "torques taken 20 ms" in describe_signals(joined([derived, derived]).delayed(
+        0.02).info)
     assert describe_signals({}).startswith("as given (no record")
 
 

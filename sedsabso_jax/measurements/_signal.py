@@ -124,8 +124,9 @@ def describe_signals(info: dict | None) -> str:
     recorded and which derived, the low-pass and its cutoff, the seconds trimmed at each
     end, the resampling and downsampling, and a delay of the torques behind the positions
     where one was applied (:meth:`~sedsabso_jax.Measurements.delayed`)."""
-    delays = {float(r.get("delay_s", 0.0)) for r in info.get("recordings", [info])} \
-        if info else {0.0}
+    info = info or {}
+    top = float(info.get("delay_s", 0.0))  # joined recordings re-timed together, or one
+    delays = {top + float(r.get("delay_s", 0.0)) for r in info.get("recordings", [])} or {top}
     if delays == {0.0}:
         return _chain(info) + "; torques and positions taken as simultaneous (no delay)"
     said = ", ".join(f"{1e3 * d:.3g} ms" for d in sorted(delays))

@@ -51,11 +51,6 @@ class DelayEstimate:
     losses: np.ndarray
     at_bound: bool
 
-    def as_dict(self) -> dict:
-        return {"seconds": self.seconds, "samples": self.samples,
-                "shifts": self.shifts.tolist(), "losses": self.losses.tolist(),
-                "at_bound": self.at_bound}
-
 
 def estimate_delay(robot: Robot, data: Data, model: TorqueModel | None = None, *,
                    largest_s: float = LARGEST_DELAY_S, limits: Limits = None

@@ -154,7 +154,7 @@ class Refined:
         from ...dynamics._mjcf_writer import to_mjcf
 
         m = self.method
-        _, reshaped = self.model.coulomb(np.ones(self.robot.n_joints))
+        reshaped = bool(self.model.shaping)
         comment = options.pop("comment", (
             f"refined by simulation error ({m.windows} windows of {m.length} s, torque "
             f"weight {m.torque_weight:g}, {self.steps} steps); "

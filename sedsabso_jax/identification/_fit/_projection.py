@@ -74,10 +74,8 @@ class Recipe:
         (:func:`~.._model._torque_model.tree_key`): its base, recordings and
         transmission, the terms it computes and those that shape the Coulomb columns."""
         m = self.model
-        shaping = tuple(t for t in m.terms if t.coulomb(np.zeros((1, m.robot.n_joints)))
-                        is not None)
         return (tree_key((m.base, m.recordings, m.transmission,
-                          tuple(m.terms[i] for i in self.terms), shaping)),
+                          tuple(m.terms[i] for i in self.terms), m.shaping)),
                 self.coulomb, self.pair_column, self.pair_joint, self.moved_columns,
                 self.rows)
 

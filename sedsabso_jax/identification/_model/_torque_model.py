@@ -205,9 +205,8 @@ class TorqueModel(eqx.Module):
 
     @functools.cached_property
     def kept(self) -> np.ndarray:
-        """Which of the model's every columns (:meth:`regressor` with ``every_column``) it
-        fits: the base columns and the extra columns the base regressor does not span
-        (booleans)."""
+        """Which of its every columns (:meth:`regressor`'s ``every_column``) the model
+        fits (booleans): the base columns, the extra ones the base does not span."""
         out = np.zeros(self.base.rank + len(self._extra_names()), dtype=bool)
         out[:self.base.rank] = True
         out[self.base.rank + kept_columns(self)] = True
@@ -253,14 +252,16 @@ class TorqueModel(eqx.Module):
                     if c is not None}
         return np.array([c for c in range(self.base.rank) if c not in friction], dtype=int)
 
+    @functools.cached_property
+    def shaping(self) -> tuple[AbstractTerm, ...]:
+        """The terms that reshape the Coulomb columns (:meth:`AbstractTerm.coulomb`)."""
+        still = np.zeros((1, self.robot.n_joints))
+        return tuple(t for t in self.terms if t.coulomb(still) is not None)
+
     def coulomb(self, qd: Any) -> tuple[Any, bool]:
-        """The model's Coulomb shape at ``qd`` (a term's, else ``sign(qd)``) and whether a
-        term reshaped it."""
-        for term in reversed(self.terms):
-            shape = term.coulomb(qd)
-            if shape is not None:
-                return shape, True
-        return jnp.sign(qd), False
+        """The model's Coulomb shape at ``qd`` (the last shaping term's, else
+        ``sign(qd)``) and whether a term reshaped it."""
+        return (self.shaping[-1].coulomb(qd), True) if self.shaping else (jnp.sign(qd), False)
 
     @property
     def prior_values(self) -> np.ndarray:
@@ -311,7 +312,7 @@ class TorqueModel(eqx.Module):
         s = self.signals(q, qd, qdd, recording, Y, probe=probe)
         take = (lambda a: a) if rows is None else (lambda a: a[rows])
         Y = take(Y)
-        if self.coulomb(np.zeros((1, n)))[1]:  # a term reshapes the Coulomb columns
+        if self.shaping:  # a term reshapes the Coulomb columns
             Y = Y.copy()
             fc = np.array(self.base.joint_columns("FC"))
             Y[..., np.arange(n), fc] = take(np.asarray(s.coulomb))
