@@ -118,6 +118,9 @@ def test_a_split_reads_the_state_of_the_whole_recording(plant):
     np.testing.assert_allclose(predicted, whole[keep] @ values)
     np.testing.assert_array_equal(model.regressor(data.q, data.qd, data.qdd, rows=keep),
                                   whole[keep])
+    for bad in (keep[1:], keep.astype(int)):
+        with pytest.raises(ValueError, match=r"rows must be \(\d+,\) booleans"):
+            model.regressor(data.q, data.qd, data.qdd, rows=bad)
 
 
 def test_one_sample_has_the_rows_of_many(plant):

@@ -194,8 +194,7 @@ class TorqueModel(eqx.Module):
     def _extra_names(self) -> list[str]:
         return [name for term in self.terms for name in term.names(self)]
 
-    # what a model works out about itself once (its names, columns, structure) lives on
-    # the immutable model itself (functools.cached_property), dropped with it
+    # what a model works out about itself once lives on it (functools.cached_property)
     @functools.cached_property
     def structure(self) -> tuple:
         """What sets the model's columns: its base, terms, transmission and recordings,
@@ -310,13 +309,15 @@ class TorqueModel(eqx.Module):
         batch = Y.shape[:-2]
         q, qd, qdd = (np.broadcast_to(a, batch + (n,)) for a in (q, qd, qdd))
         s = self.signals(q, qd, qdd, recording, Y, probe=probe)
-        take = (lambda a: a) if rows is None else (lambda a: a[rows])
-        Y = take(Y)
+        mask = None if rows is None else np.asarray(rows)
+        if mask is not None and (mask.dtype != bool or mask.shape != batch[:1]):
+            raise ValueError(f"rows must be {batch[:1]} booleans, got {mask.dtype} {mask.shape}")
+        keep: Any = slice(None) if mask is None else mask
+        Y = Y[keep].copy() if self.shaping else Y[keep]
         if self.shaping:  # a term reshapes the Coulomb columns
-            Y = Y.copy()
-            fc = np.array(self.base.joint_columns("FC"))
-            Y[..., np.arange(n), fc] = take(np.asarray(s.coulomb))
-        extra = [take(np.asarray(term.columns(self, s))) for term in self.terms]
+            Y[..., np.arange(n), np.array(self.base.joint_columns("FC"))] = \
+                np.asarray(s.coulomb)[keep]
+        extra = [np.asarray(term.columns(self, s))[keep] for term in self.terms]
         return np.concatenate([Y, *extra], -1)
 
     def regressor(self, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
@@ -350,7 +351,6 @@ class TorqueModel(eqx.Module):
         model = self.reading(values, only=lambda term: term.waiting)
         return model.regressor(q, qd, qdd, recording) @ values
 
-    # the fit's questions, answered by the terms
     def nonlinear(self) -> list[tuple[int, Nonlinear]]:
         """The parameters a fit searches: ``(term index, Nonlinear)`` of each term that
         has some."""
