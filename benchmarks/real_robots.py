@@ -3,11 +3,13 @@
 torque sensors) and the Staubli TX40 (motor side, coupled wrist).
 
 The default (``sj.select_and_identify``) chooses method, weighting, torque model and
-physical consistency by the phase folds and the speed splits pooled (``sj.Pooled``: folds
-of the motion's phase, and each joint's fast samples predicted by a fit to its slow
-ones). Its generalisation is measured on each recording by NESTED validation, the whole
-choice and fit made on one part and judged on another that no choice or fit saw, in two
-ways:
+physical consistency by the phase folds and the speed splits pooled (``sj.Pooled``:
+folds of the motion's phase, and each joint's fast samples predicted by a fit to its slow
+ones); with ``--signals auto`` it also chooses the signal chain (velocities and
+accelerations recorded or derived, and the cutoff), and the part it is judged on is made
+by the chain it chose. Its generalisation is
+measured on each recording by NESTED validation, the whole choice and fit made on one
+part and judged on another that no choice or fit saw, in two ways:
 
 - ``phase``: the recording's phase cut into 5 folds; each is predicted by the default
   chosen and fitted on the other 4 (motions like the fitted one: interpolation);
@@ -74,16 +76,20 @@ def nrms(ident, data, limits) -> float:
     return sj.validation_metrics(data.tau, pred, limits.torque_limits).nrms_limits_percent
 
 
-def subset(data: sj.Measurements, mask) -> sj.Measurements:
-    return sj.Measurements(data.times[mask], data.q[mask], data.qd[mask], data.qdd[mask],
-                           data.tau[mask])
+def judged_on(fit, data: sj.Measurements) -> sj.Measurements:
+    """``data`` made by the signal chain the default chose for ``fit`` (as loaded where it
+    kept the loaded one, or for a plain fit)."""
+    chosen = getattr(fit, "chain_selection", None)
+    return data if chosen is None or chosen.chosen == 0 else data.with_chain(chosen.chain,
+                                                                              given=False)
 
 
 def fits(robot, train: sj.Measurements, limits, transmission, base, inner,
-         settings=SETTINGS) -> dict:
+         settings=SETTINGS, signals=None) -> dict:
     """The ``settings`` on ``train``: the reports of the choices, plain OLS's
     identification; ``inner``: the phase folds (a count, or labels) of the choices by
-    phase folds and of the default's second validation."""
+    phase folds and of the default's second validation; ``signals``: the default's
+    (``DefaultValidation(signals=...)``: None, as loaded, or ``"auto"``, chosen)."""
     models = candidate_models(robot, transmission=transmission, base=base)
     common = dict(limits=limits.torque_limits, models=models)
     phase = sj.GivenFolds(inner) if np.ndim(inner) == 1 else sj.PhaseFolds(inner)
@@ -92,7 +98,7 @@ def fits(robot, train: sj.Measurements, limits, transmission, base, inner,
         # the default: its candidates, then friction at rest kept unless worse
         made = {DEFAULT: lambda: sj.select_and_identify(
                     robot, train, validation=sj.identification.DefaultValidation(
-                        interpolation=phase), **common),
+                        interpolation=phase, signals=signals), **common),
                 BY_SPEED: lambda: sj.select_and_identify(
                     robot, train, validation=sj.SpeedSplits(), **common),
                 BY_PHASE: lambda: sj.select_and_identify(robot, train, validation=phase,
@@ -110,7 +116,7 @@ def _ident(fit):
 
 
 def evaluate(name, robot, data, limits, transmission, runs, folds=5,
-             settings=SETTINGS) -> dict:
+             settings=SETTINGS, signals=None) -> dict:
     base = sj.base_parameters(robot)
     t0 = time.perf_counter()
     phase = sj.PhaseFolds(folds).splits([data])
@@ -123,16 +129,19 @@ def evaluate(name, robot, data, limits, transmission, runs, folds=5,
             # phase: the inner folds are the outer ones left; speed: the slow part's own
             inner = (np.searchsorted(np.unique(phase.labels[train]), phase.labels[train])
                      if kind == "phase" else folds)
-            found = fits(robot, subset(data, train), limits, transmission, base, inner,
-                         settings)
+            found = fits(robot, data.subset(train), limits, transmission, base, inner,
+                         settings, signals)
             for label, fit in found.items():
-                held[kind][label].append(nrms(_ident(fit), subset(data, test), limits))
-            chosen[kind].append({**found[DEFAULT].selection.chosen})
+                held[kind][label].append(nrms(_ident(fit), judged_on(fit, data.subset(test)),
+                                              limits))
+            chain = found[DEFAULT].chain_selection
+            chosen[kind].append({**found[DEFAULT].selection.chosen, "signals": None if chain
+                                 is None else chain.labels[chain.chosen]})
             predicted[kind].append(found[DEFAULT].cross_validation.score)
     nested_s = time.perf_counter() - t0
-    full = fits(robot, data, limits, transmission, base, folds, settings)
-    other_runs = {run: {label: nrms(_ident(f), d, limits) for label, f in full.items()}
-                  for run, d in runs.items()}
+    full = fits(robot, data, limits, transmission, base, folds, settings, signals)
+    other_runs = {run: {label: nrms(_ident(f), judged_on(f, d), limits)
+                        for label, f in full.items()} for run, d in runs.items()}
     report = full[DEFAULT]
     return {
         "robot": name, "samples": data.n_samples, "period_s": phase.period_s,
@@ -142,6 +151,8 @@ def evaluate(name, robot, data, limits, transmission, runs, folds=5,
         "default_chosen_per_outer_split": chosen,
         "default_predicted_per_outer_split": predicted,
         "chosen_on_all_data": report.selection.chosen,
+        "signals_on_all_data": None if report.chain_selection is None
+        else report.chain_selection.as_dict(),
         "predicted_percent": report.cross_validation.score,
         "predicted_standard_error": report.cross_validation.standard_error,
         "part_scores": report.cross_validation.part_scores,
@@ -162,6 +173,8 @@ def main(argv=None):
     ap.add_argument("--settings", default=",".join(WORDS),
                     help="the settings compared, comma-separated words of "
                          f"{', '.join(WORDS)} (default: all; 'default' must be one)")
+    ap.add_argument("--signals", choices=("as-loaded", "auto"), default="as-loaded",
+                    help="the default's signal chain: as loaded, or chosen by validation")
     args = ap.parse_args(argv)
     words = args.settings.split(",")
     unknown = [w for w in words if w not in WORDS]
@@ -174,7 +187,8 @@ def main(argv=None):
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, robot, data, limits, tr, runs in datasets(Path(tmp)):
-            rows.append(evaluate(name, robot, data, limits, tr, runs, settings=settings))
+            rows.append(evaluate(name, robot, data, limits, tr, runs, settings=settings,
+                                 signals="auto" if args.signals == "auto" else None))
             r = rows[-1]
             print(f"{name}: chosen {r['chosen_on_all_data']}, predicted "
                   f"{r['predicted_percent']:.4f} %, nested {r['nested_seconds']:.0f} s",
@@ -188,7 +202,8 @@ def main(argv=None):
     doc = {"machine": platform.processor() or platform.machine(), "rows": rows,
            "versions": {"sedsabso_jax": sj.__version__},
            "command": "python -m benchmarks.real_robots" + (
-               "" if settings == SETTINGS else f" --settings {args.settings}")}
+               "" if settings == SETTINGS else f" --settings {args.settings}") + (
+               "" if args.signals == "as-loaded" else f" --signals {args.signals}")}
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(to_json(doc))
     print(f"written: {args.json}")

@@ -81,13 +81,14 @@ def test_rs010n_noise_free_recovers_the_true_parameters(rs010n_files, tmp_path, 
 def test_kuka_real_data_end_to_end(kuka_identified):
     """The real KUKA LWR4+ runs (``KUKA_IDENTIFY``, conftest; the run the docs quote): the
     default method identifies on run 1 and validates on run 2; the JSON has the documented
-    keys (how the signals were obtained among them), the model chosen by the pooled phase folds and speed splits on run 1 (30
-    candidates: 15 unconstrained, 15 physically consistent, then friction at rest added to
-    the choice and kept: not worse by more than one standard error) is the physically
-    consistent OLS fit with offset, smooth Coulomb friction, friction growing with the load
-    and friction at rest, and the held-out NRMS over the torque limits is pinned to +-5 %
-    (measured 0.1450 %; plain OLS with Coulomb + viscous friction gives 0.217 % on slices of
-    these runs, outside the band); the report's figures are written."""
+    keys (how the signals were obtained among them, as loaded), the model chosen by the
+    pooled phase folds and speed splits on run 1 (30 candidates: 15 unconstrained, 15
+    physically consistent, then friction at rest added to the choice and kept: not worse
+    by more than one standard error) is the physically consistent OLS fit with offset,
+    smooth Coulomb friction, friction growing with the load and friction at rest, and the
+    held-out NRMS over the torque limits is pinned to +-5 % (measured 0.1450 %; plain OLS
+    with Coulomb + viscous friction gives 0.217 % on slices of these runs, outside the
+    band); the report's figures are written."""
     doc, printed, out = kuka_identified
     assert set(doc) == {"base_parameters", "fit", "validation", "settings", "signals",
                         "cross_validation", "extrapolation", "rests", "validations", "mujoco"}
@@ -97,6 +98,8 @@ def test_kuka_real_data_end_to_end(kuka_identified):
         "positions, velocities, accelerations and torques as recorded; torques and "
         "positions taken as simultaneous (no delay). This is the measurement's")
     assert "signals: positions, velocities, accelerations and torques" in printed
+    # the signals as loaded: the chain is chosen only with --signals auto
+    assert doc["signals"]["choice"] is None and "signals chosen by" not in printed
     assert len(doc["base_parameters"]["names"]) == len(doc["base_parameters"]["values"])
     val = doc["validation"]
     assert len(val["nrms_range_percent"]) == len(val["relative_rms_percent"]) == 7

@@ -58,6 +58,20 @@ class Asymmetric(eqx.Module):
         return jnp.sqrt(self.loss(u))[None]
 
 
+class Cliff(eqx.Module):
+    """:class:`Bowl`'s loss where ``u[2] <= centre[2]``, undefined (NaN) beyond: a loss
+    that cannot be evaluated everywhere (a model singular there)."""
+
+    centre: jax.Array
+
+    def residual(self, u):
+        r = Bowl(self.centre).residual(u)
+        return jnp.where(u[2] > self.centre[2], jnp.nan, r)
+
+    def loss(self, u):
+        return jnp.mean(self.residual(u) ** 2)
+
+
 LOWER, UPPER = np.full(3, -4.0), np.full(3, 4.0)
 METHODS = [CoordinateSearch(), PopulationSearch(sj.LDWPSO(), evaluations=2000),
            PopulationSearch(sj.Evosax("CMA_ES"), evaluations=2000), LeastSquaresSearch()]
@@ -114,6 +128,17 @@ def test_a_search_from_the_minimum_stays_there():
     kink = Asymmetric(jnp.asarray(centre))  # a minimum no parabola finds exactly
     np.testing.assert_array_equal(CoordinateSearch().search(kink, centre, LOWER, UPPER).u,
                                   centre)
+
+
+def test_a_loss_undefined_near_the_minimum_stops_the_polish():
+    """Trials the loss cannot evaluate (NaN) around the best point: Newton's polish
+    stays where it is, and the search returns that point and its loss."""
+    problem = Cliff(jnp.asarray(CENTRE))
+    start = np.array([0.0, 0.0, 0.0])
+    found = CoordinateSearch().search(problem, start, LOWER, UPPER)
+    assert np.isfinite(found.loss) and found.u[2] <= CENTRE[2]
+    assert found.loss == pytest.approx(float(problem.loss(jnp.asarray(found.u))))
+    assert found.loss < float(problem.loss(jnp.asarray(start)))
 
 
 @pytest.mark.parametrize("make, match", [

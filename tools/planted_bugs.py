@@ -48,6 +48,7 @@ DEGENERATE = ["tests/test_degenerate_inputs.py"]
 STARTUP = ["tests/test_cli_startup.py"]
 USABILITY = ["tests/test_cli_usability.py"]
 REPRODUCE = ["tests/test_reproduce.py"]
+CHAIN = ["tests/test_signal_chain.py"]
 
 #: (module, text, replacement, what the bug is, tests to run, reason if equivalent)
 BUGS = [
@@ -591,6 +592,28 @@ BUGS = [
     ("identification/_fit/_delay.py", "        b = (samples.tau[rows + k] * w).reshape(-1)\n",
      "        b = (samples.tau[rows - k] * w).reshape(-1)\n", "the delay's sign turned",
      ["tests/test_delay.py"], None),
+    ("identification/_default/_signals.py",
+     "    chosen = 0 if DEFAULT.not_worse(tried[0], best) else tried.index(best)\n",
+     "    chosen = 0\n", "the signal chain as loaded, whatever the validation says", CHAIN,
+     None),
+    ("identification/_default/_signals.py",
+     "    made = [[r.with_chain(c, trim_s=trim, given=False)",
+     "    made = [[r.with_chain(c, trim_s=None, given=False)",
+     "each signal chain validated on the samples it keeps (not on the same ones)", CHAIN,
+     None),
+    ("identification/_default/_select_and_identify.py",
+     "            held = {k: r.with_chain(signals.chain, given=False)\n",
+     "            held = {k: r.with_chain(chains[0], given=False)\n",
+     "the held-out recordings made by the loaded chain, not the chosen one", CHAIN, None),
+    ("measurements/_chain.py", "        return Recorded(self.times, self.q @ motion - offset, "
+     "self.tau @ torque,", "        return Recorded(self.times, self.q @ motion - offset, "
+     "self.tau,", "the recorded torques left on the motor side", CHAIN, None),
+    ("measurements/_container.py", "        keep = np.isin(made.times, self.times)\n",
+     "        keep = np.ones(made.n_samples, bool)\n",
+     "a part of a recording made again as the whole", CHAIN, None),
+    ("identification/_search/_newton.py", "        if not np.isfinite(f).all():",
+     "        if False:", "Newton's polish on a stencil with losses it cannot evaluate",
+     SEARCH, None),
 ]
 
 

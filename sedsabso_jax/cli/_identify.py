@@ -72,7 +72,8 @@ def _choice(args: argparse.Namespace, physical: bool | None, candidates: int) ->
     if args.folds != 0 and args.validation == "pooled":
         validation = DefaultValidation(args.folds, None if args.friction != AUTO
                                        or not args.friction_at_rest or args.mujoco_terms
-                                       else KEPT_TERMS)
+                                       else KEPT_TERMS,
+                                       signals=AUTO if args.signals == "auto" else None)
     elif args.folds != 0 and args.validation == "phase":
         validation = PhaseFolds(args.folds)
     elif args.folds != 0:
@@ -258,6 +259,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      f"above {words.PREDICT_ABOVE:g}; "
                      "phase: folds of the motion's phase; recordings: leave one --data file "
                      "out")
+    val.add_argument("--signals", choices=("as-loaded", "auto"), default="as-loaded",
+                     help="auto: qd, qdd recorded or derived at 5, 10 Hz, chosen by "
+                     "validation (as-loaded)")
     val.add_argument("--folds", metavar="K", type=non_negative_int, default=words.FOLDS,
                      help=f"folds over the motion's phase ({words.FOLDS}); 0: no validation "
                      "at all")

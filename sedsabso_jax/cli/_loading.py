@@ -117,6 +117,8 @@ def load_all(paths: Sequence[str], load: dict[str, Any], motor_side: bool,
     """The files at ``paths``, loaded with ``load`` (:func:`loading`), on the joint side:
     motor side through ``transmission``, or their torque columns times the joint-side
     ``drive_gains`` of ``load``."""
+    import numpy as np
+
     from ..measurements._container import Measurements
     from ..measurements._load import load_measurements
 
@@ -127,8 +129,13 @@ def load_all(paths: Sequence[str], load: dict[str, Any], motor_side: bool,
         assert transmission is not None  # transmission_of: --motor-side needs --gear-ratios
         data = [transmission.to_joint_side(d) for d in data]
     elif gains is not None:
+        n = len(gains)
         data = [Measurements(d.times, d.q, d.qd, d.qdd, d.tau * gains, source=d.source,
-                             info=dict(d.info, drive_gains=list(gains))) for d in data]
+                             info=dict(d.info, drive_gains=list(gains)),
+                             recorded=None if d.recorded is None else d.recorded.linear(
+                                 np.eye(n), np.zeros(n), np.diag(gains),
+                                 dict(d.recorded.info, drive_gains=list(gains))))
+                for d in data]
     return data
 
 
@@ -145,7 +152,8 @@ def add_loading(group: argparse._ArgumentGroup) -> None:
     """The flags of how files are loaded: filtering, resampling, edges."""
     group.add_argument("--cutoff-hz", metavar="HZ", type=positive_float, default=None,
                        help="low-pass cutoff where velocities/accelerations are derived or "
-                       "torques filtered (default 10 Hz)")
+                       "torques filtered (default 10 Hz; given, identify --signals auto "
+                       "keeps it)")
     group.add_argument("--filter-torques", action="store_true", help="low-pass the torques")
     group.add_argument("--downsample", metavar="K", type=positive_int, default=1,
                        help="keep every k-th sample after filtering (1)")

@@ -24,6 +24,7 @@ from jaxtyping import ArrayLike
 
 from .._output import PathLike
 from . import _formats as formats
+from ._chain import Recorded, SignalChain
 from ._signal import median_rate
 
 #: Field name (as in the files) -> attribute of :class:`Measurements`.
@@ -118,6 +119,8 @@ class Measurements(eqx.Module):
         tau: ``(T, n)`` joint torques.
         source: the file read, ``"simulated"``, or ``"arrays"``.
         info: what was derived, filtered, sliced (JSON-friendly values).
+        recorded: the signals as recorded, where a :class:`~._chain.SignalChain` made
+            these (:func:`~sedsabso_jax.load_measurements`); None: given as they are.
 
     Construction checks shapes, finiteness and times (ValueError naming the field).
     """
@@ -129,9 +132,11 @@ class Measurements(eqx.Module):
     tau: np.ndarray
     source: str = "arrays"
     info: dict = eqx.field(default_factory=dict)
+    recorded: Recorded | None = None
 
     def __init__(self, times: ArrayLike, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
-                 tau: ArrayLike, source: str = "arrays", info: dict | None = None):
+                 tau: ArrayLike, source: str = "arrays", info: dict | None = None,
+                 recorded: Recorded | None = None):
         source = str(source)
         checked = check_fields(source, {"times": times, "positions": q, "velocities": qd,
                                         "accelerations": qdd, "torques": tau})
@@ -145,6 +150,10 @@ class Measurements(eqx.Module):
         self.times, self.q, self.qd = arrays["times"], arrays["q"], arrays["qd"]
         self.qdd, self.tau = arrays["qdd"], arrays["tau"]
         self.source, self.info = source, dict(info or {})
+        if recorded is not None and not isinstance(recorded, Recorded):
+            raise TypeError(f"{source}: recorded must be a Recorded or None, got "
+                            f"{type(recorded).__name__}")
+        self.recorded = recorded
 
     @property
     def n_joints(self) -> int:
@@ -174,7 +183,21 @@ class Measurements(eqx.Module):
         info = dict(self.info)
         info["operations"] = [*info.get("operations", []), note]
         return Measurements(self.times[index], self.q[index], self.qd[index], self.qdd[index],
-                            self.tau[index], source=self.source, info=info)
+                            self.tau[index], source=self.source, info=info,
+                            recorded=self.recorded)
+
+    def subset(self, mask: ArrayLike) -> Measurements:
+        """The samples where ``mask`` (``(T,)`` booleans) is True; at least 2 must remain.
+        Like :meth:`slice`, it keeps :attr:`recorded`: :meth:`with_chain` makes the same
+        samples by another chain."""
+        keep = np.asarray(mask)
+        if keep.dtype != bool or keep.shape != self.times.shape:
+            raise ValueError(f"{self.source}: mask must be {self.times.shape} booleans, got "
+                             f"{keep.dtype} {keep.shape}")
+        if keep.sum() < 2:
+            raise ValueError(f"{self.source}: the mask keeps {int(keep.sum())} samples; at "
+                             f"least 2 must remain")
+        return self._with(keep, f"subset of {int(keep.sum())} samples")
 
     def slice(self, start: int | None = None, stop: int | None = None,
               step: int = 1) -> Measurements:
@@ -212,6 +235,47 @@ class Measurements(eqx.Module):
         info = dict(self.info, delay_s=float(self.info.get("delay_s", 0.0)) + d)
         return Measurements(t[keep], self.q[keep], self.qd[keep], self.qdd[keep], tau,
                             source=self.source, info=info)
+
+    @property
+    def chain(self) -> SignalChain | None:
+        """The :class:`~._chain.SignalChain` that made these from :attr:`recorded` (None:
+        given as they are)."""
+        said = self.info.get("chain")
+        return None if self.recorded is None or said is None else SignalChain(
+            said["cutoff_hz"], said["derive"], said["filter_torques"])
+
+    def with_chain(self, chain: SignalChain, *, trim_s: float | None = None,
+                   given: bool = True) -> Measurements:
+        """These measurements made again from :attr:`recorded` by ``chain``
+        (:meth:`made_by`; ``trim_s``: the seconds dropped at each end, None: the filter's
+        ringing); where these were sliced, downsampled or a subset, the same samples, of
+        those the chain keeps. A ValueError where nothing was recorded (built from
+        arrays, or delayed)."""
+        if not isinstance(chain, SignalChain):
+            raise TypeError(f"chain must be a SignalChain, got {type(chain).__name__}")
+        if self.recorded is None:
+            raise ValueError(f"{self.source}: these measurements keep no recorded signals "
+                             f"(built from arrays, or delayed after loading): load them "
+                             f"with load_measurements or recorded_signals to apply another "
+                             f"signal chain")
+        made = Measurements.made_by(chain, self.recorded, trim_s=trim_s, given=given)
+        if "operations" not in self.info:
+            return made
+        # sliced, downsampled or a subset: the same samples (those the chain keeps)
+        keep = np.isin(made.times, self.times)
+        return Measurements(made.times[keep], made.q[keep], made.qd[keep], made.qdd[keep],
+                            made.tau[keep], source=made.source,
+                            info=dict(made.info, operations=self.info["operations"]),
+                            recorded=self.recorded)
+
+    @classmethod
+    def made_by(cls, chain: SignalChain, recorded: Recorded, *, trim_s: float | None = None,
+                given: bool = True) -> Measurements:
+        """The measurements ``chain`` makes of ``recorded``
+        (:meth:`~._chain.SignalChain.made`), keeping ``recorded``."""
+        (times, q, qd, qdd, tau), info = chain.made(recorded, trim_s=trim_s, given=given)
+        return cls(times, q, qd, qdd, tau, source=recorded.source, info=info,
+                   recorded=recorded)
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The arrays under the ``.npz`` key names (:data:`._formats.NPZ_KEYS`)."""

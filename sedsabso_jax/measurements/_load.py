@@ -7,18 +7,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from jaxtyping import ArrayLike
 
 from .._output import PathLike
 from . import _formats as formats
+from ._chain import Recorded, SignalChain
 from ._container import Measurements, check_fields, positive_int
-from ._signal import (
-    BUTTERWORTH_ORDER,
-    DEFAULT_CUTOFF_HZ,
-    differentiate,
-    edge_seconds,
-    lowpass,
-    median_rate,
-)
+from ._signal import DEFAULT_CUTOFF_HZ
 
 
 def load_measurements(path: PathLike, *, n_joints: int | None = None,
@@ -37,18 +32,22 @@ def load_measurements(path: PathLike, *, n_joints: int | None = None,
         filter_torques: low-pass the torques too (same zero-phase filter).
         downsample: keep every ``downsample``-th sample, after derivation and filtering.
         derive: derive velocities and accelerations from the positions even where the
-            file has them (see :func:`differentiate`); missing ones are always derived.
+            file has them (see :func:`~._signal.differentiate`); missing ones are always derived.
         resample_hz: interpolate every recorded signal linearly onto a uniform grid at
             this rate first (before any derivation or filtering): for logs whose time
             stamps are far from uniform.
         trim_edges: when anything was derived or filtered, drop the first and last
-            :func:`edge_seconds` (``2 / cutoff_hz``) of the recording, where the
+            :func:`~._signal.edge_seconds` (``2 / cutoff_hz``) of the recording, where the
             zero-phase filter rings (spikes in the derived accelerations at the ends), so
             they never enter a fit.
 
     Positions are kept as recorded. ``info`` records, for velocities, accelerations and
-    torques, ``"recorded"`` or how they were obtained, the cutoff used and the seconds
-    trimmed at each end (``"trimmed_s"``).
+    torques, ``"recorded"`` or how they were obtained, the cutoff used, the seconds
+    trimmed at each end (``"trimmed_s"``) and the ``chain`` (``given``: whether
+    ``cutoff_hz``, ``derive`` or ``filter_torques`` chose it; if not, the default may
+    choose another, :func:`~sedsabso_jax.select_and_identify`). This is the
+    :class:`~._chain.SignalChain` of those options applied to the file's
+    :class:`~._chain.Recorded` signals, which the result keeps (``recorded``).
     """
     path = Path(path)
     source = str(path)
@@ -71,43 +70,33 @@ def load_measurements(path: PathLike, *, n_joints: int | None = None,
     fields = check_fields(source, raw, n_joints)
     if resample_hz is not None:
         fields = _resample(fields, resample_hz, source)
-    times = fields["times"]
-    rate = median_rate(times)
-    cutoff = DEFAULT_CUTOFF_HZ if cutoff_hz is None else cutoff_hz
-    info.update({"format": suffix[1:], "rate_hz": rate, "cutoff_hz": None,
-                 "resampled_hz": None if resample_hz is None else float(resample_hz),
-                 "filter": None, "velocities": "recorded", "accelerations": "recorded",
-                 "torques": "recorded", "downsample": downsample})
-    filt = (f"Butterworth low-pass, order {BUTTERWORTH_ORDER}, zero phase (sosfiltfilt), "
-            f"{float(cutoff):g} Hz at the median rate {rate:.6g} Hz")
-    need = [k for k in ("velocities", "accelerations") if derive or fields[k] is None]
-    if need:
-        qd, qdd = differentiate(times, fields["positions"], cutoff, source=source)
-        for key, value in (("velocities", qd), ("accelerations", qdd)):
-            if key in need:
-                fields[key] = value
-                info[key] = "derived from positions: low-pass, then np.gradient on times"
-        info["cutoff_hz"], info["filter"] = float(cutoff), filt
-    if filter_torques:
-        fields["torques"] = lowpass(fields["torques"], rate, cutoff, source=source)
-        info["torques"] = "recorded, low-passed"
-        info["cutoff_hz"], info["filter"] = float(cutoff), filt
-    first, last = 0, len(times)
-    info["trimmed_s"] = 0.0
-    if trim_edges and info["cutoff_hz"] is not None:
-        edge = edge_seconds(cutoff)
-        first = int(np.searchsorted(times, times[0] + edge, side="left"))
-        last = int(np.searchsorted(times, times[-1] - edge, side="right"))
-        if last - first < 2:
-            raise ValueError(
-                f"{source}: the recording ({times[-1] - times[0]:.3g} s) is too short to drop "
-                f"the filter's {edge:.3g} s edge transients at both ends; raise the cutoff "
-                f"(now {float(cutoff):g} Hz) or keep the edges (trim_edges=False)")
-        info["trimmed_s"] = edge
-    index = slice(first, last, downsample)
-    return Measurements(times[index], fields["positions"][index], fields["velocities"][index],
-                        fields["accelerations"][index], fields["torques"][index],
-                        source=source, info=info)
+    info.update({"format": suffix[1:],
+                 "resampled_hz": None if resample_hz is None else float(resample_hz)})
+    recorded = Recorded(fields["times"], fields["positions"], fields["torques"],
+                        fields["velocities"], fields["accelerations"], source, info,
+                        downsample, bool(trim_edges))
+    chain = SignalChain(DEFAULT_CUTOFF_HZ if cutoff_hz is None else cutoff_hz, derive,
+                        filter_torques)
+    return Measurements.made_by(chain, recorded,
+                                given=cutoff_hz is not None or derive or filter_torques)
+
+
+def recorded_signals(times: ArrayLike, q: ArrayLike, tau: ArrayLike,
+                     qd: ArrayLike | None = None, qdd: ArrayLike | None = None, *,
+                     chain: SignalChain | None = None, source: str = "arrays",
+                     trim_edges: bool = True) -> Measurements:
+    """Measurements from recorded arrays by ``chain`` (None: :class:`SignalChain`'s
+    defaults, derive what is missing at 10 Hz, left to the default to choose), keeping
+    the recording so that another chain can be applied
+    (:meth:`~._container.Measurements.with_chain`) or chosen
+    (:func:`~sedsabso_jax.select_and_identify`). ``qd``, ``qdd``: None where not
+    recorded."""
+    fields = check_fields(str(source), {"times": times, "positions": q, "velocities": qd,
+                                        "accelerations": qdd, "torques": tau})
+    recorded = Recorded(fields["times"], fields["positions"], fields["torques"],
+                        fields["velocities"], fields["accelerations"], str(source),
+                        trim_edges=trim_edges)
+    return Measurements.made_by(chain or SignalChain(), recorded, given=chain is not None)
 
 
 def _resample(fields: dict, rate_hz, source: str) -> dict:

@@ -124,9 +124,13 @@ class Transmission(eqx.Module):
         info = dict(data.info, transmission={
             "matrix": self.matrix.tolist(), "offset": self.offset.tolist(),
             "drive_gains": None if self.drive_gains is None else self.drive_gains.tolist()})
+        gains = np.ones(self.n_joints) if self.drive_gains is None else self.drive_gains
+        recorded = None if data.recorded is None else data.recorded.linear(
+            Kinv_T, self.offset, gains[:, None] * self.matrix,
+            dict(data.recorded.info, transmission=info["transmission"]))
         return Measurements(data.times, data.q @ Kinv_T - self.offset, data.qd @ Kinv_T,
                             data.qdd @ Kinv_T, tau_m @ self.matrix, source=data.source,
-                            info=info)
+                            info=info, recorded=recorded)
 
 
 #: A transmission as the identification takes it: a :class:`Transmission`, its matrix ``K``

@@ -11,6 +11,7 @@ from typing import Any, ClassVar, cast
 
 import equinox as eqx
 
+from ...measurements._chain import SignalChain
 from ...measurements._container import Measurements
 from .._estimators._estimator import Estimator, Sigma
 from .._estimators._least_squares import PhysicallyConsistent
@@ -27,6 +28,18 @@ def estimator_candidates(method: str | None = None, sigma: Sigma = AUTO, **optio
     return DEFAULT.estimator_candidates(method, sigma, **options)
 
 
+def _signals(value: object) -> object:
+    """AUTO, None, or a tuple of chains (one chain: a tuple of it)."""
+    if value is None or isinstance(value, str | tuple):
+        return value
+    if isinstance(value, SignalChain):
+        return (value,)
+    try:
+        return tuple(value)  # type: ignore[arg-type]
+    except TypeError:
+        return value  # __check_init__ names it
+
+
 class DefaultValidation(eqx.Module):
     """What :func:`~sedsabso_jax.select_and_identify` chooses by unless told, made for
     the recordings (:meth:`of`): ``Pooled((PhaseFolds(folds), SpeedSplits()))``, with
@@ -36,11 +49,19 @@ class DefaultValidation(eqx.Module):
     ``kept`` (:class:`~sedsabso_jax.identification.KeptTerms`, default
     :data:`~sedsabso_jax.identification.KEPT_TERMS`: friction at rest with its
     displacements searched; None: nothing) added to the choice and kept unless it
-    validates worse."""
+    validates worse. Between the two, ``signals``: the signal chains chosen among
+    (:func:`~._signals.choose_chain`; None, the default: none, the signals as given;
+    :data:`AUTO`: :meth:`~._policy.Default.chains`, where every recording keeps its
+    recorded signals and was loaded without choosing a chain, else none; one
+    :class:`~sedsabso_jax.measurements.SignalChain` or several, the first kept unless
+    another validates better). Not chosen by default yet: on the KUKA LWR4+ the choice
+    made before the kept terms dropped friction at rest on two outer splits of the
+    nested validation (docs/explanation/identification-defaults.md)."""
 
     folds: int = eqx.field(default=DEFAULT.folds, converter=as_int)
     kept: KeptTerms | None = KEPT_TERMS
     interpolation: Validation | None = None
+    signals: Any = eqx.field(default=None, converter=_signals)
     kind: ClassVar[str] = "default"
     min_recordings: ClassVar[int] = 1
 
@@ -51,6 +72,11 @@ class DefaultValidation(eqx.Module):
         if self.interpolation is not None and not isinstance(self.interpolation, Validation):
             raise TypeError(f"interpolation must be a Validation (PhaseFolds(), "
                             f"GivenFolds(labels), ...) or None, got {self.interpolation!r}")
+        if not (self.signals is None or self.signals == AUTO or (
+                isinstance(self.signals, tuple) and self.signals
+                and all(isinstance(c, SignalChain) for c in self.signals))):
+            raise TypeError(f"signals must be {AUTO!r}, None or SignalChain(...)s, got "
+                            f"{self.signals!r}")
 
     def of(self, recordings: Sequence[Measurements]) -> Validation:
         """The validation of ``recordings``."""
@@ -58,6 +84,26 @@ class DefaultValidation(eqx.Module):
             self.interpolation if self.interpolation is not None
             else RecordingFolds() if len(recordings) > 1 else PhaseFolds(self.folds))
         return Pooled((interpolation, SpeedSplits()))
+
+    def chains(self, recordings: Sequence[Measurements]) -> tuple[SignalChain, ...]:
+        """The signal chains chosen among for ``recordings`` (the first: as they were
+        loaded, or the first given); none: the signals as given. A ValueError where
+        chains are given and a recording keeps no recorded signals."""
+        if self.signals is None or (self.signals == AUTO and any(
+                r.recorded is None or r.info.get("chain", {}).get("given", True)
+                for r in recordings)):
+            return ()
+        if self.signals == AUTO:
+            loaded = recordings[0].chain
+            assert loaded is not None  # recorded, with a chain in its info
+            found = DEFAULT.chains([r.recorded for r in recordings  # type: ignore[misc]
+                                    ], loaded)
+            return found if len(found) > 1 else ()  # one: the loaded, nothing to choose
+        bare = [r.source for r in recordings if r.recorded is None]
+        if bare:
+            raise ValueError(f"{', '.join(bare)}: keeps no recorded signals to apply a signal "
+                             f"chain to: load it with load_measurements or recorded_signals")
+        return tuple(self.signals)
 
 
 #: How :class:`Choice`'s messages name the options: as

@@ -13,6 +13,8 @@ from typing import Any, ClassVar
 import equinox as eqx
 import numpy as np
 
+from ...measurements._chain import Recorded, SignalChain
+from ...measurements._signal import edge_seconds, median_rate
 from .._estimators._estimator import Estimator, Sigma
 from .._estimators._least_squares import OLS, WLS
 from .._model._actuators import Armature
@@ -47,6 +49,10 @@ class Default(eqx.Module):
     ``fit_below`` and predict above ``predict_above`` of each joint's peak speed, the
     ``peak_quantile`` quantile of ``|qd|``.
 
+    Signal chains (chosen on request, ``DefaultValidation(signals="auto")``): the loaded
+    one, recorded and derived velocities and accelerations at each of ``cutoffs`` Hz
+    (:meth:`chains`).
+
     Rule: one standard error (Hastie, Tibshirani & Friedman, *The Elements of
     Statistical Learning*, 2009, Sec. 7.10) of the split-by-split excess, with excesses
     below ``tie_fraction`` of the best error counted as ties (:meth:`not_worse`);
@@ -67,7 +73,28 @@ class Default(eqx.Module):
     predict_above: float = 0.8
     peak_quantile: float = 0.995
     tie_fraction: float = 0.01
+    cutoffs: tuple[float, ...] = (5.0, 10.0)
     auto: ClassVar[str] = AUTO
+
+    def chains(self, recorded: Sequence[Recorded], loaded: SignalChain
+               ) -> tuple[SignalChain, ...]:
+        """The signal chains chosen among for recordings of ``recorded`` signals,
+        ``loaded`` (the chain they were loaded with) first: velocities and accelerations
+        recorded where there are, then derived, each at every one of :attr:`cutoffs`
+        that lies below every recording's Nyquist frequency and leaves it 4 ringing
+        times long; chains that make the same signals of every recording once."""
+        out, seen = [], set()
+        for chain in (loaded, *(SignalChain(c, derive) for derive in (False, True)
+                                for c in self.cutoffs)):
+            filtered = [r for r in recorded if chain.filters(r)]
+            if any(not (chain.cutoff_hz < median_rate(r.times) / 2 and 4 * edge_seconds(
+                    chain.cutoff_hz) < r.times[-1] - r.times[0]) for r in filtered):
+                continue
+            key = (tuple(chain.label(r) for r in recorded), chain.filter_torques)
+            if key not in seen:
+                seen.add(key)
+                out.append(chain)
+        return tuple(out)
 
     @property
     def kept_terms(self) -> tuple[tuple[AbstractTerm, ...], ...]:

@@ -48,6 +48,7 @@ from ._held_out import (
     judge,
     named_recordings,
 )
+from ._signals import ChainSelection
 from ._simulator_check import SimulatorCheck
 from ._stages import stage_lines
 
@@ -164,6 +165,8 @@ class IdentificationReport:
     #: the same judgement of the choice made for MuJoCo (only the terms it holds), beside
     #: a choice that has others (:meth:`beside_made_for_mujoco`), or None
     made_for_mujoco: SimulatorCheck | None = None
+    #: the signal chain's choice (:func:`~._signals.choose_chain`), or None
+    chain_selection: ChainSelection | None = None
 
     def beside_made_for_mujoco(self, other: IdentificationReport) -> IdentificationReport:
         """This report with ``other``'s MuJoCo judgement (the choice among the terms MuJoCo
@@ -225,6 +228,7 @@ class IdentificationReport:
         lines = [f"{robot.name}: {len(ident.names)} parameters identified by {ident.method} "
                  f"(friction {ident.model.friction}) from {self.data.n_samples} samples of "
                  f"{self.data.source}", "", f"signals: {self.signals}", "",
+                 *([] if self.chain_selection is None else self.chain_selection.lines()),
                  markdown_table(["#", "parameter", "value", "std", "relative std [%]"], rows),
                  "", columns_note(
                      ("#", "row number"),
@@ -323,7 +327,9 @@ class IdentificationReport:
                 "prior_strength": None if self.prior_selection is None
                 else self.prior_selection.as_dict()},
             "settings": {**settings, **ident.settings},
-            "signals": {"description": self.signals, "info": self.data.info},
+            "signals": {"description": self.signals, "info": self.data.info,
+                        "choice": None if self.chain_selection is None
+                        else self.chain_selection.as_dict()},
             "extrapolation": None if self.extrapolation is None
             else self.extrapolation.as_dict(),
             "rests": None if self.rests is None else self.rests.as_dict(),

@@ -15,6 +15,7 @@ options are stated once, in :class:`~._choice.Choice`."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable
 
 from ...dynamics._robot import Robot
@@ -28,21 +29,22 @@ from .._model._torque_model import TorqueModel
 from .._options import one_or_more
 from .._recordings import Data, recordings_of
 from .._validation._progress import Fits
-from .._validation._selection import choose_prior_strength, select_model
+from .._validation._selection import choose_prior_strength, revalidated, select_model
 from .._validation._splits import Validation
 from .._work import evaluate_seconds, fit_seconds
 from ._choice import Choice, DefaultValidation
 from ._held_out import HeldOutData, named_recordings
 from ._policy import DEFAULT
 from ._report import IdentificationReport
+from ._signals import choose_chain
 
 
 def _work_after(estimators: Iterable[Estimator], models: Iterable[TorqueModel], rows: int,
-                held_rows: int, prior_fits: int) -> float:
+                held_rows: int, fits: int) -> float:
     """The estimated seconds after the model choice, for the costliest of ``estimators``
-    and ``models``: ``prior_fits`` fits of the prior's validation, the fit on all
-    ``rows`` and the report's evaluation (with ``held_rows``)."""
-    return max(prior_fits * fit_seconds(e, m, rows) + fit_seconds(e, m, rows, final=True)
+    and ``models``: ``fits`` fits of the validations after it (the signal chains', the
+    prior's), the fit on all ``rows`` and the report's evaluation (with ``held_rows``)."""
+    return max(fits * fit_seconds(e, m, rows) + fit_seconds(e, m, rows, final=True)
                + evaluate_seconds(m, rows + held_rows) for e in estimators for m in models)
 
 
@@ -56,10 +58,13 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
     """Identify ``robot`` from ``data`` as ``sedsabso-jax identify`` does by default
     (:data:`~._policy.DEFAULT`): choose the estimator and the torque model by validation
     (:func:`~sedsabso_jax.select_model`: the simplest within one standard error of the
-    lowest validated error), then the kept terms (added and kept unless they validate
-    worse), then the pull to the prior, fit on all of ``data``, and judge the fit on it,
-    on the validation and on each held-out recording alone (never used to choose or fit),
-    and, for several, on their mean. The rules between the options are :class:`Choice`'s.
+    lowest validated error), then the signal chain (:func:`~._signals.choose_chain`: the
+    velocities and accelerations recorded or derived, and the cutoff that derives them;
+    the held-out recordings made by the same chain), then the kept terms (added and kept
+    unless they validate worse), then the pull to the prior, fit on all of ``data``, and
+    judge the fit on it, on the validation and on each held-out recording alone (never
+    used to choose or fit), and, for several, on their mean. The rules between the
+    options are :class:`Choice`'s.
 
     Arguments:
         data: a :class:`~sedsabso_jax.Measurements`, several (one rate, fitted together;
@@ -113,6 +118,13 @@ def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: 
     ``models`` and ``estimators`` the candidates, ``held`` the held-out recordings by
     name (:func:`~._held_out.named_recordings`)."""
     estimators = choice.estimators(estimators)
+    chains = (choice.validation.chains(recordings)
+              if isinstance(choice.validation, DefaultValidation) else ())
+    if len(chains) == 1:  # given: applied to every recording, nothing chosen
+        recordings = [r.with_chain(chains[0]) for r in recordings]
+        held = {k: r if r.recorded is None else r.with_chain(chains[0])
+                for k, r in held.items()}
+        chains = ()
     chosen_by = choice.validation_of(recordings)
     check_selection_data(robot, recordings, models, per_joint("limits", limits, robot.n_joints),
                          chosen_by, held_out=list(held.values()),
@@ -124,19 +136,32 @@ def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: 
     # the work after the model choice, for the progress: the prior's validation, the fit
     # on all the data, the evaluation; of the costliest candidate until one is chosen
     rows, held_rows = sum(r.q.size for r in recordings), sum(r.q.size for r in held.values())
-    prior_fits = (len(DEFAULT.prior_strengths) * len(chosen_by.splits(recordings))
-                  if progress is not None and chosen_by is not None
-                  and choice.prior_strength == "cv" else 0)
+    splits = (len(chosen_by.splits(recordings))
+              if progress is not None and chosen_by is not None else 0)
+    prior_fits = len(DEFAULT.prior_strengths) * splits if choice.prior_strength == "cv" else 0
+    chain_fits = len(chains) * splits  # an estimate: each on all the rows
     fits = Fits(progress, _work_after(
         estimators, models + (() if kept is None else kept.models(models[-1])), rows,
-        held_rows, prior_fits) if progress is not None else 0.0)
-    selection = cv = None
+        held_rows, prior_fits + chain_fits) if progress is not None else 0.0)
+    selection = cv = signals = None
     if chosen_by is None:
         estimator, model = estimators[0], models[0]
     else:
         selection = select_model(robot, recordings, models=models, estimators=estimators,
                                  validation=chosen_by, limits=limits, kept=kept,
                                  progress=fits)
+        if chains:
+            fits.later = _work_after((selection.estimator,), (selection.model,), rows,
+                                     held_rows, prior_fits)
+            signals, recordings, chosen_by = choose_chain(
+                robot, recordings, chains, selection.estimator, selection.model, chosen_by,
+                per_joint("limits", limits, robot.n_joints), fits)
+            held = {k: r.with_chain(signals.chain, given=False)
+                    if signals.chosen and r.recorded is not None else r
+                    for k, r in held.items()}
+            if signals.chosen:
+                selection = revalidated(selection, robot, recordings, chosen_by, limits,
+                                        signals.labels[signals.chosen], fits)
         estimator, model = selection.estimator, selection.model
         cv = selection.cross_validation
         fits.step(f"{'chosen' if len(selection.candidates) > 1 else 'validated'}: "
@@ -157,5 +182,6 @@ def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: 
     report = IdentificationReport.evaluate(ident, recordings, held or None, limits,
                                            cross_validation=cv, selection=selection,
                                            prior_selection=prior_selection)
+    report = dataclasses.replace(report, chain_selection=signals)
     fits.step("evaluated" + (" on the held-out data" if held else ""), evaluation, 0.0)
     return report

@@ -118,6 +118,8 @@ def polish(problem: SearchProblem, u: np.ndarray, loss: float, lower: np.ndarray
         f = np.concatenate([losses(problem, padded[c * size:(c + 1) * size])
                             for c in range(chunks)])[:len(trials)]
         evaluations += chunks * size
+        if not np.isfinite(f).all():  # trials the loss cannot evaluate: no model, stay
+            break
         f0, g, H = quadratic(f, k, pairs, STEP)
         if steps == 1:  # the size the loss's rounding is relative to: its trials'
             scale = max(scale, float(np.abs(f).max()))

@@ -148,7 +148,8 @@ class Selection:
             mark = "chosen" if settings is self.chosen else (
                 "lowest" if settings is self.best else "")
             rows.append([settings["method"], str(settings.get("sigma") or "equal"),
-                         "yes" if settings.get("physical") else "no", settings["friction"],
+                         "yes" if settings.get("physical") else "no", settings["friction"]
+                         + (f" [{settings['signals']}]" if "signals" in settings else ""),
                          str(cv.n_parameters), f"{cv.score:.4f} +- {cv.standard_error:.4f}",
                          *(f"{cv.part_scores[k]:.4f}" for k in parts), mark])
         return rows
@@ -226,6 +227,24 @@ def select_model(robot: Robot, data: Data, *,
     chosen = tried[index][0]
     return Selection(candidates=tuple(tried), chosen=chosen, best=best_settings,
                      options=tuple(options))
+
+
+def revalidated(selection: Selection, robot: Robot, data: Data, validation: Validation,
+                limits: Limits, signals: str,
+                progress: ProgressCallback | Fits | None = None) -> Selection:
+    """``selection`` with its choice validated again on ``data``, made by the signal
+    chain ``signals`` (a row with ``"signals"`` in its settings, the one chosen)."""
+    prepared = Prepared.of(robot, data, validation)
+    index = selection._index(selection.chosen)
+    estimator, model = selection.options[index]
+    each = split_seconds(train_rows(prepared.samples, prepared.splits), estimator, model)
+    fits = Fits.of(progress)
+    fits.ahead(sum(each))
+    settings = {**selection.chosen, "signals": signals}
+    cv = prepared.validate(estimator, model, per_joint("limits", limits, robot.n_joints),
+                           fits.after(f"{estimator.name}, {model.friction}, {signals}", each))
+    return Selection(candidates=(*selection.candidates, (settings, cv)), chosen=settings,
+                     best=selection.best, options=(*selection.options, (estimator, model)))
 
 
 def _with_kept(kept: KeptTerms, index: int, tried: list, options: list,

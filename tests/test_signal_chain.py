@@ -1,0 +1,226 @@
+"""The signal chain (``sj.measurements.SignalChain``): the loader is a chain applied to the
+recorded signals, which the measurements keep; the default's validation chooses the
+chain (``DefaultValidation(signals="auto")``, not the default yet), against figures
+computed here from the true motion."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import sedsabso_jax as sj
+from sedsabso_jax.measurements import SignalChain, recorded_signals
+
+ROBOT = sj.robots.rs010n()
+LIMITS = np.array([300.0, 300.0, 150.0])
+#: One candidate model and estimator: the chain is the only choice.
+FAST = dict(estimators=sj.OLS(), models=sj.TorqueModel.of(ROBOT), physical=False)
+#: The default's validation with the signal chain chosen (not the default yet).
+CHOSEN = sj.identification.DefaultValidation(signals="auto")
+RATE = 200.0
+
+
+def _motion(seconds: float, seed: int, scale: float = 1.0):
+    """A sum of sines per joint (0.1-0.6 Hz): times, q, qd, qdd exact."""
+    t = np.arange(int(seconds * RATE)) / RATE
+    rng = np.random.default_rng(seed)
+    f = rng.uniform(0.1, 0.6, (4, 3))
+    a = scale * rng.uniform(0.1, 0.3, (4, 3))
+    p = rng.uniform(0, 2 * np.pi, (4, 3))
+    arg = 2 * np.pi * f[None] * t[:, None, None] + p[None]
+    w = 2 * np.pi * f[None]
+    q = (a * np.sin(arg)).sum(1)
+    qd = (a * w * np.cos(arg)).sum(1)
+    qdd = (-a * w ** 2 * np.sin(arg)).sum(1)
+    return t, q, qd, qdd
+
+
+def _torques(q, qd, qdd, seed):
+    tau = np.asarray(sj.inverse_dynamics(ROBOT, ROBOT.params, q, qd, qdd)) + 2.0 * qd
+    rms = np.sqrt(np.mean(tau ** 2, 0))
+    return tau + 0.01 * rms * np.random.default_rng(seed).standard_normal(tau.shape)
+
+
+def _recording(seconds, seed, *, lagging_qdd: bool, scale: float = 1.0):
+    """The RS010N's recording; ``lagging_qdd``: the recorded accelerations are those of a
+    logger's causal 0.5 Hz filter (late and small), as some drives record them."""
+    import scipy.signal
+
+    t, q, qd, qdd = _motion(seconds, seed, scale)
+    tau = _torques(q, qd, qdd, seed + 100)
+    q_rec = q + 2e-5 * np.random.default_rng(seed + 200).standard_normal(q.shape)
+    recorded_qdd = qdd
+    if lagging_qdd:
+        b, a = scipy.signal.butter(2, 0.5, fs=RATE)
+        recorded_qdd = scipy.signal.lfilter(b, a, qdd, axis=0)
+    return recorded_signals(t, q_rec, tau, qd, recorded_qdd, source=f"run {seed}")
+
+
+def test_the_loader_is_a_chain_of_the_recorded_signals(tmp_path):
+    """``load_measurements(path, cutoff_hz, derive)`` equals the loaded measurements made
+    again by that chain (``with_chain``), to the bit; the record says who chose it."""
+    t, q, qd, qdd = _motion(12.0, 1)
+    tau = _torques(q, qd, qdd, 2)
+    path = sj.Measurements(t, q, qd, qdd, tau).save(tmp_path / "run.npz")
+    plain = sj.load_measurements(path)
+    assert plain.chain == SignalChain() and plain.info["chain"]["given"] is False
+    np.testing.assert_array_equal(plain.qdd, qdd)  # recorded, nothing trimmed
+    for chain in (SignalChain(5.0, derive=True), SignalChain(20.0, filter_torques=True)):
+        loaded = sj.load_measurements(path, cutoff_hz=chain.cutoff_hz, derive=chain.derive,
+                                      filter_torques=chain.filter_torques)
+        again = plain.with_chain(chain)
+        assert loaded.info["chain"]["given"] is True and loaded.chain == chain
+        for a, b in zip(loaded.arrays().values(), again.arrays().values()):
+            np.testing.assert_array_equal(a, b)
+        assert loaded.info["trimmed_s"] == 2.0 / chain.cutoff_hz
+    # a part keeps the recording: another chain makes the same samples (those it keeps)
+    mask = np.sin(t) > 0
+    part = plain.subset(mask).with_chain(SignalChain(5.0, derive=True))
+    whole = plain.with_chain(SignalChain(5.0, derive=True))
+    inner = np.isin(whole.times, t[mask])
+    np.testing.assert_array_equal(part.times, whole.times[inner])
+    np.testing.assert_array_equal(part.qdd, whole.qdd[inner])
+    np.testing.assert_array_equal(plain.slice(0, 100).with_chain(SignalChain()).tau, tau[:100])
+    with pytest.raises(ValueError, match="keep no recorded signals"):
+        plain.delayed(0.01).with_chain(SignalChain())
+    with pytest.raises(ValueError, match="cutoff_hz must be a positive number"):
+        SignalChain(-1.0)
+
+
+def test_a_transmission_carries_the_recorded_signals(tmp_path):
+    """Motor-side recordings converted to the joint side keep their recorded signals
+    converted alike: a chain applied after the conversion equals the chain applied when
+    loading, then converted (filters and differences are linear, per column)."""
+    t, q, _, _ = _motion(10.0, 3)
+    tau = np.cos(q)
+    path = sj.Measurements(t, q, q, q, tau).save(tmp_path / "motor.npz")
+    raw = np.load(path)
+    only_q = tmp_path / "motor_q.npz"
+    np.savez(only_q, times=raw["times"], positions=raw["positions"], torques=raw["torques"])
+    tr = sj.Transmission.from_gear_ratios([100.0, 80.0, 50.0], coupling={(3, 2): 0.5},
+                                          drive_gains=[0.2, 0.3, 0.4])
+    joint = tr.to_joint_side(sj.load_measurements(only_q))
+    chain = SignalChain(5.0)
+    direct = tr.to_joint_side(sj.load_measurements(only_q, cutoff_hz=5.0))
+    again = joint.with_chain(chain)
+    for a, b in zip(direct.arrays().values(), again.arrays().values()):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.filterwarnings("ignore:held-out data go beyond")
+def test_the_choice_derives_what_the_recording_gets_wrong():
+    """Recorded accelerations late and small (a causal logger filter): the default
+    chooses accelerations derived from the positions, and the held-out error (a new
+    motion, exact signals) is lower than with the recorded ones; with exact recorded
+    signals it keeps them. Every candidate is scored on the same samples."""
+    bad = _recording(30.0, 4, lagging_qdd=True)
+    good = _recording(30.0, 4, lagging_qdd=False)
+    t, q, qd, qdd = _motion(15.0, 5, scale=1.3)
+    new = sj.Measurements(t, q, qd, qdd, _torques(q, qd, qdd, 6))
+    chosen = sj.select_and_identify(ROBOT, bad, held_out=new, limits=LIMITS, **FAST,
+                                    validation=CHOSEN)
+    sel = chosen.chain_selection
+    assert sel.labels[0] == "recorded" and sel.labels[sel.chosen].startswith("derived")
+    assert all(np.array_equal(cv.tested, sel.validations[0].tested) for cv in sel.validations)
+    as_given = sj.select_and_identify(ROBOT, bad, held_out=new, limits=LIMITS, **FAST)
+    assert as_given.chain_selection is None  # the default takes the signals as given
+    assert chosen.validation.nrms_limits_percent < 0.5 * as_given.validation.nrms_limits_percent
+    assert "derived" in chosen.text().split("signals chosen by validation")[1][:2000]
+    document = chosen.document({})
+    assert document["signals"]["choice"]["chosen"] == sel.labels[sel.chosen]
+    assert document["signals"]["info"]["accelerations"].startswith("derived")
+    kept = sj.select_and_identify(ROBOT, good, limits=LIMITS, **FAST,
+                                  validation=CHOSEN).chain_selection
+    assert kept.chosen == 0
+
+
+@pytest.mark.filterwarnings("ignore:held-out data go beyond")
+def test_a_part_of_a_recording_with_its_own_folds():
+    """A part of a recording (a nested validation's outer fit), its folds given per
+    sample: the chain chosen on its samples (the model with friction at rest, kept on the
+    loaded signals), the choice validated again on the chosen signals by the same splits;
+    the held-out part is made by the same chain."""
+    data = _recording(30.0, 10, lagging_qdd=True)
+    fit = data.times < 22.0
+    labels = (np.arange(int(fit.sum())) * 5) // int(fit.sum())
+    report = sj.select_and_identify(
+        ROBOT, data.subset(fit), held_out=data.subset(~fit), limits=LIMITS,
+        estimators=sj.OLS(), physical=False,
+        models=sj.identification.candidate_models(ROBOT, [(), [sj.Offset()]]),
+        validation=sj.identification.DefaultValidation(interpolation=sj.GivenFolds(labels),
+                                                       signals="auto"))
+    sel, chosen = report.chain_selection, report.selection
+    assert sel.chosen != 0 and report.held_out.info["chain"]["derive"] is True
+    # the kept terms were judged on the loaded signals; the choice validated again on the
+    # chosen ones, with the same splits (those of the part's own folds)
+    assert any(s.get("kept_terms") and "signals" not in s for s, _ in chosen.candidates)
+    on_chain = [cv for s, cv in chosen.candidates if s.get("signals")]
+    assert len(on_chain) == 1 and chosen.chosen["signals"] == sel.labels[sel.chosen]
+    assert on_chain[0].split_names == sel.validations[0].split_names
+    assert report.cross_validation is on_chain[0]
+    assert report.data.info["trimmed_s"] == sel.trim_s
+
+
+@pytest.mark.filterwarnings("ignore:held-out data go beyond")
+def test_a_chain_given_is_applied_and_checked():
+    """A chain the user gave is applied, not chosen; a chain given when loading is kept;
+    bad values are named."""
+    bad = _recording(20.0, 7, lagging_qdd=True)
+    chain = SignalChain(5.0, derive=True)
+    new = _recording(10.0, 8, lagging_qdd=True)
+    fixed = sj.select_and_identify(ROBOT, bad, held_out=new, limits=LIMITS, **FAST,
+                                   validation=sj.identification.DefaultValidation(signals=chain))
+    assert fixed.chain_selection is None and fixed.held_out.info["chain"]["cutoff_hz"] == 5.0
+    assert fixed.data.info["chain"] == {"cutoff_hz": 5.0, "derive": True,
+                                        "filter_torques": False, "given": True}
+    given = bad.with_chain(SignalChain(10.0))  # chosen by the user: not chosen again
+    assert sj.select_and_identify(ROBOT, given, limits=LIMITS, **FAST,
+                                  validation=CHOSEN).chain_selection is None
+    with pytest.raises(TypeError, match="signals must be 'auto', None or SignalChain"):
+        sj.identification.DefaultValidation(signals="derived")
+    with pytest.raises(ValueError, match="keeps no recorded signals"):
+        sj.select_and_identify(ROBOT, bad.delayed(0.005), limits=LIMITS, **FAST,
+                               validation=sj.identification.DefaultValidation(
+                                   signals=[SignalChain(), SignalChain(5.0)]))
+
+
+def test_the_chains_report_their_work():
+    """``progress`` names each chain's validation (one call per split), ``done`` grows
+    and ends at ``total``; the chains' work is in the total from the first call."""
+    data = _recording(20.0, 9, lagging_qdd=True)
+    calls: list[tuple[str, float, float]] = []
+    sj.select_and_identify(ROBOT, data, limits=LIMITS, **FAST, validation=CHOSEN,
+                           progress=lambda *call: calls.append(call))
+    labels = [c[0] for c in calls]
+    splits = labels.count("OLS, viscous-coulomb")
+    for chain in ("recorded", "derived, 5 Hz", "derived, 10 Hz"):
+        assert labels.count(f"signals: {chain}") == splits
+    done = [c[1] for c in calls]
+    assert (np.diff(done) >= 0).all() and done[-1] == calls[-1][2]
+    chains_work = done[labels.index("signals: derived, 10 Hz") + splits - 1] - done[splits - 1]
+    assert calls[0][2] > chains_work
+
+
+def test_the_command_chooses_on_request(tmp_path, capsys):
+    """``identify --signals auto`` chooses the chain (the report's table, the JSON's
+    ``signals.choice``); without it, or with ``--cutoff-hz`` given, the signals are taken
+    as loaded."""
+    import json
+
+    from sedsabso_jax import cli
+
+    t, q, qd, qdd = _motion(30.0, 11)
+    np.savez(tmp_path / "run.npz", times=t, positions=q, torques=_torques(q, qd, qdd, 12))
+    flags = ["identify", "--robot", "rs010n", "--data", str(tmp_path / "run.npz"),
+             "--friction", "viscous-coulomb", "--method", "OLS", "--weights", "equal",
+             "--no-physical"]
+    for extra, chosen in (([], False), (["--signals", "auto"], True),
+                          (["--signals", "auto", "--cutoff-hz", "10"], False)):
+        js = tmp_path / "r.json"
+        assert cli.main([*flags, *extra, "--json", str(js)]) == 0
+        printed = capsys.readouterr().out
+        choice = json.loads(js.read_text())["signals"]["choice"]
+        assert (choice is not None) == chosen == ("signals chosen by validation" in printed)
+        if chosen:
+            assert [c["signals"] for c in choice["candidates"]] == ["derived, 10 Hz",
+                                                                   "derived, 5 Hz"]
