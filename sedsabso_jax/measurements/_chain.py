@@ -93,9 +93,12 @@ class SignalChain(eqx.Module):
         (for ``recorded``; None: always), the torques' filter."""
         if recorded is not None and not self.filters(recorded):
             return "recorded"
-        which = "derived" if self.derive or (recorded is not None and recorded.qd is None) \
-            else "recorded qd" if recorded is not None and recorded.qdd is None else \
-            "recorded" if recorded is not None else "recorded where there are"
+        if self.derive or (recorded is not None and recorded.qd is None):
+            which = "derived"
+        elif recorded is None:
+            which = "recorded where there are"
+        else:  # recorded velocities; accelerations derived, or only the torques filtered
+            which = "recorded qd" if recorded.qdd is None else "recorded"
         return f"{which}, {self.cutoff_hz:g} Hz" + ", torques low-passed" * self.filter_torques
 
     def made(self, recorded: Recorded, *, trim_s: float | None = None,
@@ -107,8 +110,9 @@ class SignalChain(eqx.Module):
         first and last ``trim_s`` seconds dropped (None: the filter's ringing,
         :func:`~._signal.edge_seconds`, where anything is filtered and
         ``recorded.trim_edges``), then every ``recorded.downsample``-th sample of the
-        recording kept. ``info`` records what was done, with ``chain`` (this chain's fields, and
-        ``given``: whether the user chose it, rather than the loader's default)."""
+        recording kept. ``info`` records what was done, with ``chain`` (this chain's
+        fields, and ``given``: whether the user chose it, rather than the loader's
+        default)."""
         times, source = recorded.times, recorded.source
         rate = median_rate(times)
         cutoff = (check_cutoff(self.cutoff_hz, rate, source) if self.filters(recorded)
