@@ -55,19 +55,26 @@ SETTINGS = (DEFAULT, BY_SPEED, BY_PHASE, PREVIOUS, PLAIN)
 WORDS = dict(zip(("default", "speed", "phase", "previous", "plain"), SETTINGS))
 
 
-def datasets(tmp: Path):
+#: ``--robots``' words.
+ROBOTS = ("kuka", "panda", "tx40")
+
+
+def datasets(tmp: Path, robots=ROBOTS):
     """(name, robot, measurements (joint side), limits, transmission, held-out runs)."""
-    kuka = sj.robots.kuka_lwr4()
-    yield ("KUKA LWR4+", kuka, sj.load_kuka_lwr4(1), joint_limits("kuka_lwr4", kuka),
-           None, {"run 2 (repeats run 1: repeatability)": sj.load_kuka_lwr4(2)})
-    panda = sj.robots.franka_panda()
-    data = sj.load_measurements(real_robots.panda_npz(tmp / "panda.npz"), n_joints=7,
-                                resample_hz=1000.0)
-    yield "Franka Panda", panda, data, joint_limits("franka_panda", panda), None, {}
-    tx40 = sj.robots.staubli_tx40()
-    data, tr = real_robots.tx40_joint_side(tmp)
-    yield ("Staubli TX40 (motor side, 1 kHz)", tx40, data,
-           joint_limits("staubli_tx40", tx40), tr, {})
+    if "kuka" in robots:
+        kuka = sj.robots.kuka_lwr4()
+        yield ("KUKA LWR4+", kuka, sj.load_kuka_lwr4(1), joint_limits("kuka_lwr4", kuka),
+               None, {"run 2 (repeats run 1: repeatability)": sj.load_kuka_lwr4(2)})
+    if "panda" in robots:
+        panda = sj.robots.franka_panda()
+        data = sj.load_measurements(real_robots.panda_npz(tmp / "panda.npz"), n_joints=7,
+                                    resample_hz=1000.0)
+        yield "Franka Panda", panda, data, joint_limits("franka_panda", panda), None, {}
+    if "tx40" in robots:
+        tx40 = sj.robots.staubli_tx40()
+        data, tr = real_robots.tx40_joint_side(tmp)
+        yield ("Staubli TX40 (motor side, 1 kHz)", tx40, data,
+               joint_limits("staubli_tx40", tx40), tr, {})
 
 
 
@@ -175,7 +182,12 @@ def main(argv=None):
                          f"{', '.join(WORDS)} (default: all; 'default' must be one)")
     ap.add_argument("--signals", choices=("as-loaded", "auto"), default="as-loaded",
                     help="the default's signal chain: as loaded, or chosen by validation")
+    ap.add_argument("--robots", default=",".join(ROBOTS),
+                    help=f"the robots, comma-separated words of {', '.join(ROBOTS)}")
     args = ap.parse_args(argv)
+    robots = args.robots.split(",")
+    if not set(robots) <= set(ROBOTS):
+        ap.error(f"--robots: {sorted(set(robots) - set(ROBOTS))}; known: {', '.join(ROBOTS)}")
     words = args.settings.split(",")
     unknown = [w for w in words if w not in WORDS]
     if unknown or "default" not in words:
@@ -186,7 +198,7 @@ def main(argv=None):
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for name, robot, data, limits, tr, runs in datasets(Path(tmp)):
+        for name, robot, data, limits, tr, runs in datasets(Path(tmp), robots):
             rows.append(evaluate(name, robot, data, limits, tr, runs, settings=settings,
                                  signals="auto" if args.signals == "auto" else None))
             r = rows[-1]
@@ -203,7 +215,8 @@ def main(argv=None):
            "versions": {"sedsabso_jax": sj.__version__},
            "command": "python -m benchmarks.real_robots" + (
                "" if settings == SETTINGS else f" --settings {args.settings}") + (
-               "" if args.signals == "as-loaded" else f" --signals {args.signals}")}
+               "" if args.signals == "as-loaded" else f" --signals {args.signals}") + (
+               "" if robots == list(ROBOTS) else f" --robots {args.robots}")}
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(to_json(doc))
     print(f"written: {args.json}")

@@ -43,6 +43,10 @@ def test_the_delay_of_a_simulated_plant_is_recovered(rate, delay):
     weighed = estimate_delay(robot, data, largest_s=0.03, limits=(50.0, 100.0, 200.0))
     assert abs(weighed.seconds - delay) < 0.25 / rate and weighed.seconds != found.seconds
     assert found.samples == pytest.approx(found.seconds * rate)
+    # every sample with its shifted neighbours inside the recording, no more dropped
+    m = found.shifts.max()
+    assert found.residuals == (data.n_samples - 2 * (m + 1)) * 3
+    assert found.rate == pytest.approx(rate) and m >= 0.03 * rate
     assert not found.at_bound and found.losses.argmin() in (
         np.abs(found.shifts - delay * rate).argsort()[:2])
     # the recording re-timed by the delay found fits better than as recorded

@@ -268,7 +268,7 @@ def test_how_the_signals_were_obtained_is_said(tmp_path):
     # a delay, of one recording or of several re-timed together, is said
     late = derived.delayed(0.02)
     assert describe_signals(late.info).endswith("torques taken 20 ms after the positions "
-                                                "they answer (Measurements.delayed)")
+                                                "they answer")
     assert "torques taken 20 ms" in describe_signals(joined([late, late]).info)
     assert "torques taken 20 ms" in describe_signals(joined([derived, derived]).delayed(
         0.02).info)

@@ -1,7 +1,7 @@
 """The signal chain (``sj.measurements.SignalChain``): the loader is a chain applied to the
 recorded signals, which the measurements keep; the default's validation chooses the
-chain (``DefaultValidation(signals="auto")``, not the default yet), against figures
-computed here from the true motion."""
+chain and the torques' delay (``DefaultValidation(signals="auto")``, not the default
+yet), against figures computed here from the true motion."""
 
 from __future__ import annotations
 
@@ -15,8 +15,10 @@ ROBOT = sj.robots.rs010n()
 LIMITS = np.array([300.0, 300.0, 150.0])
 #: One candidate model and estimator: the chain is the only choice.
 FAST = dict(estimators=sj.OLS(), models=sj.TorqueModel.of(ROBOT), physical=False)
-#: The default's validation with the signal chain chosen (not the default yet).
+#: The default's validation with the signal chain chosen (not the default yet), and as
+#: it is: the signals as given.
 CHOSEN = sj.identification.DefaultValidation(signals="auto")
+AS_GIVEN = sj.identification.DefaultValidation()
 RATE = 200.0
 
 
@@ -122,7 +124,8 @@ def test_the_choice_derives_what_the_recording_gets_wrong():
     sel = chosen.chain_selection
     assert sel.labels[0] == "recorded" and sel.labels[sel.chosen].startswith("derived")
     assert all(np.array_equal(cv.tested, sel.validations[0].tested) for cv in sel.validations)
-    as_given = sj.select_and_identify(ROBOT, bad, held_out=new, limits=LIMITS, **FAST)
+    as_given = sj.select_and_identify(ROBOT, bad, held_out=new, limits=LIMITS, **FAST,
+                                      validation=AS_GIVEN)
     assert as_given.chain_selection is None  # the default takes the signals as given
     assert chosen.validation.nrms_limits_percent < 0.5 * as_given.validation.nrms_limits_percent
     assert "derived" in chosen.text().split("signals chosen by validation")[1][:2000]
@@ -172,7 +175,8 @@ def test_a_chain_given_is_applied_and_checked():
                                    validation=sj.identification.DefaultValidation(signals=chain))
     assert fixed.chain_selection is None and fixed.held_out.info["chain"]["cutoff_hz"] == 5.0
     assert fixed.data.info["chain"] == {"cutoff_hz": 5.0, "derive": True,
-                                        "filter_torques": False, "given": True}
+                                        "filter_torques": False, "delay_s": 0.0,
+                                        "given": True}
     given = bad.with_chain(SignalChain(10.0))  # chosen by the user: not chosen again
     assert sj.select_and_identify(ROBOT, given, limits=LIMITS, **FAST,
                                   validation=CHOSEN).chain_selection is None
@@ -182,6 +186,58 @@ def test_a_chain_given_is_applied_and_checked():
         sj.select_and_identify(ROBOT, bad.delayed(0.005), limits=LIMITS, **FAST,
                                validation=sj.identification.DefaultValidation(
                                    signals=[SignalChain(), SignalChain(5.0)]))
+
+
+def _lagging(recording, delay_s: float):
+    """``recording`` with its torques logged ``delay_s`` late: at ``t`` the torque of
+    ``t - delay_s`` (linear interpolation, the first samples dropped)."""
+    r = recording.recorded
+    keep = r.times >= r.times[0] + delay_s
+    tau = np.column_stack([np.interp(r.times[keep] - delay_s, r.times, c) for c in r.tau.T])
+    return recorded_signals(r.times[keep], r.q[keep], tau, r.qd[keep], r.qdd[keep],
+                            source=r.source)
+
+
+@pytest.mark.filterwarnings("ignore:held-out data go beyond")
+def test_a_delay_is_searched_and_kept_where_it_validates():
+    """Torques logged 12 ms (2.4 samples) late: the choice searches the delay with the
+    chosen model, finds it within a tenth of a sample, applies it (it validates better)
+    to the identification and the held-out data, and the held-out error falls; the
+    chain's delay pairs the recorded torques with the motion ``delay_s`` earlier; a
+    delay is not kept where the torques are on time."""
+    late = _lagging(_recording(30.0, 13, lagging_qdd=False), 0.012)
+    new = _lagging(_recording(15.0, 14, lagging_qdd=False, scale=1.2), 0.012)
+    chosen = sj.select_and_identify(ROBOT, late, held_out=new, limits=LIMITS, **FAST,
+                                    validation=CHOSEN)
+    sel = chosen.chain_selection
+    assert abs(sel.delay.seconds - 0.012) < 0.1 / RATE and not sel.delay.at_bound
+    assert sel.delayed and sel.chosen == 1 and sel.chain.delay_s == sel.delay.seconds
+    # every other chain validated with its own delay, searched on each split
+    assert all(len(d) == len(sel.validations[0].fold_scores) for d in sel.split_delays[1:])
+    assert len(set(sel.split_delays[1])) == len(sel.split_delays[1])  # each its own
+    assert all(abs(c.delay_s - 0.012) < 0.1 / RATE for c in sel.chains[1:])
+    assert 0 < sel.delay.standard_error_s < 0.1 / RATE
+    assert chosen.held_out.info["chain"]["delay_s"] == sel.delay.seconds
+    assert "torques +12 ms" in sel.labels[sel.chosen]
+    as_given = sj.select_and_identify(ROBOT, late, held_out=new, limits=LIMITS, **FAST,
+                                      validation=AS_GIVEN)
+    assert chosen.validation.nrms_limits_percent < 0.7 * as_given.validation.nrms_limits_percent
+    assert "delay, searched with the chosen model on the recorded signals: the torques +12 ms" \
+        in chosen.text()
+    made = late.with_chain(SignalChain(delay_s=0.0123), trim_s=0.05)
+    r = late.recorded
+    same = np.isin(r.times, made.times)
+    np.testing.assert_array_equal(made.tau, r.tau[same])  # the torques as recorded
+    for got, x in ((made.q, r.q), (made.qd, r.qd)):
+        earlier = np.column_stack([np.interp(made.times - 0.0123, r.times, c) for c in x.T])
+        np.testing.assert_allclose(got, earlier, rtol=0, atol=1e-4 * np.abs(x).max())
+    assert made.info["delay_s"] == 0.0123 and made.chain.delay_s == 0.0123
+    on_time = sj.select_and_identify(ROBOT, _recording(30.0, 13, lagging_qdd=False),
+                                     limits=LIMITS, **FAST, validation=CHOSEN).chain_selection
+    assert abs(on_time.delay.seconds) < 0.1 / RATE and on_time.chain.delay_s == 0.0
+    assert not on_time.delayed and all(c.delay_s == 0.0 for c in on_time.chains[2:])
+    with pytest.raises(ValueError, match="delay_s must be a finite number of seconds"):
+        SignalChain(delay_s="soon")
 
 
 def test_the_chains_report_their_work():
@@ -203,8 +259,8 @@ def test_the_chains_report_their_work():
 
 def test_the_command_chooses_on_request(tmp_path, capsys):
     """``identify --signals auto`` chooses the chain (the report's table, the JSON's
-    ``signals.choice``); without it, or with ``--cutoff-hz`` given, the signals are taken
-    as loaded."""
+    ``signals.choice``); without it (``--signals as-loaded``), or with ``--cutoff-hz``
+    given, the signals are taken as loaded."""
     import json
 
     from sedsabso_jax import cli
@@ -222,5 +278,25 @@ def test_the_command_chooses_on_request(tmp_path, capsys):
         choice = json.loads(js.read_text())["signals"]["choice"]
         assert (choice is not None) == chosen == ("signals chosen by validation" in printed)
         if chosen:
-            assert [c["signals"] for c in choice["candidates"]] == ["derived, 10 Hz",
-                                                                   "derived, 5 Hz"]
+            found = [c["signals"].split(", torques ")[0] for c in choice["candidates"]]
+            assert found == ["derived, 10 Hz", "derived, 10 Hz", "derived, 5 Hz"]
+            assert choice["delay_searches"][0]["seconds"] == choice["candidates"][1]["delay_s"]
+
+
+def test_splits_left_without_samples_are_dropped():
+    """The chains are compared on the samples every chain keeps: a split whose samples to
+    predict (or to fit) all lie in the trimmed ends is dropped, the others kept with their
+    names and kinds (a short recording's fastest samples at its ends stopped the choice)."""
+    from sedsabso_jax.identification._default._signals import restricted
+    from sedsabso_jax.identification._validation._splits import Splits
+
+    keep = np.r_[np.zeros(3, bool), np.ones(6, bool), np.zeros(3, bool)]
+    ends = np.r_[np.ones(2, bool), np.zeros(8, bool), np.ones(2, bool)]
+    middle = ~ends & ~np.eye(12, dtype=bool)[5]
+    splits = Splits(train=(~ends, ~middle, middle), test=(ends, middle, ~middle),
+                    names=("fast at the ends", "phase 1", "phase 2"),
+                    parts=("speed splits", "phase folds", "phase folds"))
+    left = restricted(splits, keep)
+    assert left.names == ("phase 1", "phase 2") and left.parts == ("phase folds",) * 2
+    np.testing.assert_array_equal(left.test[0], middle[keep])
+    assert all(t.shape == (6,) for t in left.train + left.test)

@@ -260,8 +260,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      "phase: folds of the motion's phase; recordings: leave one --data file "
                      "out")
     val.add_argument("--signals", choices=("as-loaded", "auto"), default="as-loaded",
-                     help="auto: qd, qdd recorded or derived at 5, 10 Hz, chosen by "
-                     "validation (as-loaded)")
+                     help="auto: qd, qdd recorded or derived at 5, 10 Hz, and the torques' "
+                     "delay, chosen by validation (as-loaded)")
     val.add_argument("--folds", metavar="K", type=non_negative_int, default=words.FOLDS,
                      help=f"folds over the motion's phase ({words.FOLDS}); 0: no validation "
                      "at all")

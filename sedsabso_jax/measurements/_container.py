@@ -242,7 +242,7 @@ class Measurements(eqx.Module):
         given as they are)."""
         said = self.info.get("chain")
         return None if self.recorded is None or said is None else SignalChain(
-            said["cutoff_hz"], said["derive"], said["filter_torques"])
+            said["cutoff_hz"], said["derive"], said["filter_torques"], said.get("delay_s", 0.0))
 
     def with_chain(self, chain: SignalChain, *, trim_s: float | None = None,
                    given: bool = True) -> Measurements:

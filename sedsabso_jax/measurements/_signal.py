@@ -123,15 +123,15 @@ def describe_signals(info: dict | None) -> str:
     several recordings joined: each one's, the same said once): which signals were
     recorded and which derived, the low-pass and its cutoff, the seconds trimmed at each
     end, the resampling and downsampling, and a delay of the torques behind the positions
-    where one was applied (:meth:`~sedsabso_jax.Measurements.delayed`)."""
+    where one was applied (a :class:`~._chain.SignalChain`'s ``delay_s``, or
+    :meth:`~sedsabso_jax.Measurements.delayed`)."""
     info = info or {}
     top = float(info.get("delay_s", 0.0))  # joined recordings re-timed together, or one
     delays = {top + float(r.get("delay_s", 0.0)) for r in info.get("recordings", [])} or {top}
     if delays == {0.0}:
         return _chain(info) + "; torques and positions taken as simultaneous (no delay)"
     said = ", ".join(f"{1e3 * d:.3g} ms" for d in sorted(delays))
-    return _chain(info) + f"; torques taken {said} after the positions they answer " \
-                          f"(Measurements.delayed)"
+    return _chain(info) + f"; torques taken {said} after the positions they answer"
 
 
 def _chain(info: dict | None) -> str:

@@ -49,14 +49,14 @@ class DefaultValidation(eqx.Module):
     ``kept`` (:class:`~sedsabso_jax.identification.KeptTerms`, default
     :data:`~sedsabso_jax.identification.KEPT_TERMS`: friction at rest with its
     displacements searched; None: nothing) added to the choice and kept unless it
-    validates worse. Between the two, ``signals``: the signal chains chosen among
+    validates worse. After them, ``signals``: the signal chains chosen among
     (:func:`~._signals.choose_chain`; None, the default: none, the signals as given;
-    :data:`AUTO`: :meth:`~._policy.Default.chains`, where every recording keeps its
-    recorded signals and was loaded without choosing a chain, else none; one
-    :class:`~sedsabso_jax.measurements.SignalChain` or several, the first kept unless
-    another validates better). Not chosen by default yet: on the KUKA LWR4+ the choice
-    made before the kept terms dropped friction at rest on two outer splits of the
-    nested validation (docs/explanation/identification-defaults.md)."""
+    :data:`AUTO`: :meth:`~._policy.Default.chains` and the torques' delay, where every
+    recording keeps its recorded signals and was loaded without choosing a chain, else
+    none; one :class:`~sedsabso_jax.measurements.SignalChain` or several, the first kept
+    unless another validates better, no delay searched). Not the default yet: its nested
+    validation on the three shipped robots with the delay is not complete
+    (docs/explanation/identification-defaults.md)."""
 
     folds: int = eqx.field(default=DEFAULT.folds, converter=as_int)
     kept: KeptTerms | None = KEPT_TERMS

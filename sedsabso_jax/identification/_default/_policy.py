@@ -17,6 +17,7 @@ from ...measurements._chain import Recorded, SignalChain
 from ...measurements._signal import edge_seconds, median_rate
 from .._estimators._estimator import Estimator, Sigma
 from .._estimators._least_squares import OLS, WLS
+from .._fit._delay import LARGEST_DELAY_S
 from .._model._actuators import Armature
 from .._model._friction import SmoothCoulomb
 from .._model._load import LoadFriction
@@ -51,7 +52,8 @@ class Default(eqx.Module):
 
     Signal chains (chosen on request, ``DefaultValidation(signals="auto")``): the loaded
     one, recorded and derived velocities and accelerations at each of ``cutoffs`` Hz
-    (:meth:`chains`).
+    (:meth:`chains`), then the torques' delay searched up to ``largest_delay_s`` either
+    way.
 
     Rule: one standard error (Hastie, Tibshirani & Friedman, *The Elements of
     Statistical Learning*, 2009, Sec. 7.10) of the split-by-split excess, with excesses
@@ -74,6 +76,7 @@ class Default(eqx.Module):
     peak_quantile: float = 0.995
     tie_fraction: float = 0.01
     cutoffs: tuple[float, ...] = (5.0, 10.0)
+    largest_delay_s: float = LARGEST_DELAY_S
     auto: ClassVar[str] = AUTO
 
     def chains(self, recorded: Sequence[Recorded], loaded: SignalChain

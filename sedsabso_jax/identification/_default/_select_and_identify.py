@@ -32,7 +32,7 @@ from .._validation._progress import Fits
 from .._validation._selection import choose_prior_strength, revalidated, select_model
 from .._validation._splits import Validation
 from .._work import evaluate_seconds, fit_seconds
-from ._choice import Choice, DefaultValidation
+from ._choice import AUTO, Choice, DefaultValidation
 from ._held_out import HeldOutData, named_recordings
 from ._policy import DEFAULT
 from ._report import IdentificationReport
@@ -58,10 +58,11 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
     """Identify ``robot`` from ``data`` as ``sedsabso-jax identify`` does by default
     (:data:`~._policy.DEFAULT`): choose the estimator and the torque model by validation
     (:func:`~sedsabso_jax.select_model`: the simplest within one standard error of the
-    lowest validated error), then the signal chain (:func:`~._signals.choose_chain`: the
-    velocities and accelerations recorded or derived, and the cutoff that derives them;
-    the held-out recordings made by the same chain), then the kept terms (added and kept
-    unless they validate worse), then the pull to the prior, fit on all of ``data``, and
+    lowest validated error) and the kept terms (added and kept unless they validate
+    worse), then the signal chain (:func:`~._signals.choose_chain`: the velocities and
+    accelerations recorded or derived, the cutoff that derives them, the torques' delay;
+    the held-out recordings made by the same chain), then the pull to the prior, fit on
+    all of ``data``, and
     judge the fit on it, on the validation and on each held-out recording alone (never
     used to choose or fit), and, for several, on their mean. The rules between the
     options are :class:`Choice`'s.
@@ -120,6 +121,9 @@ def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: 
     estimators = choice.estimators(estimators)
     chains = (choice.validation.chains(recordings)
               if isinstance(choice.validation, DefaultValidation) else ())
+    # the delay is searched with the chains the default chooses among, not given ones
+    delay = bool(chains) and isinstance(choice.validation, DefaultValidation) \
+        and choice.validation.signals == AUTO
     if len(chains) == 1:  # given: applied to every recording, nothing chosen
         recordings = [r.with_chain(chains[0]) for r in recordings]
         held = {k: r if r.recorded is None else r.with_chain(chains[0])
@@ -139,7 +143,7 @@ def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: 
     splits = (len(chosen_by.splits(recordings))
               if progress is not None and chosen_by is not None else 0)
     prior_fits = len(DEFAULT.prior_strengths) * splits if choice.prior_strength == "cv" else 0
-    chain_fits = len(chains) * splits  # an estimate: each on all the rows
+    chain_fits = (len(chains) + delay) * splits  # an estimate: each on all the rows
     fits = Fits(progress, _work_after(
         estimators, models + (() if kept is None else kept.models(models[-1])), rows,
         held_rows, prior_fits + chain_fits) if progress is not None else 0.0)
@@ -155,11 +159,11 @@ def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: 
                                      held_rows, prior_fits)
             signals, recordings, chosen_by = choose_chain(
                 robot, recordings, chains, selection.estimator, selection.model, chosen_by,
-                per_joint("limits", limits, robot.n_joints), fits)
-            held = {k: r.with_chain(signals.chain, given=False)
-                    if signals.chosen and r.recorded is not None else r
-                    for k, r in held.items()}
-            if signals.chosen:
+                per_joint("limits", limits, robot.n_joints), fits,
+                DEFAULT.largest_delay_s if delay else None)
+            if signals is not None and signals.chosen:
+                held = {k: r.with_chain(signals.chain, given=False)
+                        if r.recorded is not None else r for k, r in held.items()}
                 selection = revalidated(selection, robot, recordings, chosen_by, limits,
                                         signals.labels[signals.chosen], fits)
         estimator, model = selection.estimator, selection.model

@@ -32,7 +32,7 @@ from .._estimators._estimator import Limits, per_joint
 from .._model._offset import Offset
 from .._model._torque_model import TorqueModel
 from .._recordings import Data
-from ._samples import recorded
+from ._samples import Samples, recorded
 
 #: The largest delay tried by default [s], either sign.
 LARGEST_DELAY_S = 0.02
@@ -43,13 +43,33 @@ class DelayEstimate:
     """What :func:`estimate_delay` found: the delay in ``seconds`` (positive: the torques
     lag the motion) and in ``samples``; ``shifts`` (whole samples) and ``losses`` (the
     weighted mean square residual at each); ``at_bound``: the best whole-sample shift is
-    the largest tried (the delay may lie beyond: widen ``largest_s``)."""
+    the largest tried (the delay may lie beyond: widen ``largest_s``); ``rate`` the
+    samples' rate [Hz]; ``residuals`` and ``columns`` how many rows and fitted columns the
+    losses are of."""
 
     seconds: float
     samples: float
     shifts: np.ndarray
     losses: np.ndarray
     at_bound: bool
+    rate: float = float("nan")
+    residuals: int = 0
+    columns: int = 0
+
+    @property
+    def standard_error_s(self) -> float:
+        """The delay's standard error [s] from the losses' curvature at the vertex, as for
+        white residuals: ``sqrt(2 s^2 / S'')``, ``S`` the residual sum of squares, ``s^2``
+        its minimum over the degrees of freedom. Residuals correlated in time (a model's
+        error is) make the true error larger. NaN at the bound or where the losses do not
+        curve up."""
+        best = int(np.argmin(self.losses))
+        if self.at_bound or not 0 < best < self.losses.size - 1:
+            return float("nan")
+        down, here, up = self.losses[best - 1:best + 2]
+        curvature = (down - 2 * here + up) * self.residuals  # S'' per sample^2
+        s2 = max(here, 0.0) * self.residuals / max(self.residuals - self.columns, 1)
+        return float(np.sqrt(2 * s2 / curvature) / self.rate) if curvature > 0 else float("nan")
 
 
 def estimate_delay(robot: Robot, data: Data, model: TorqueModel | None = None, *,
@@ -66,15 +86,41 @@ def estimate_delay(robot: Robot, data: Data, model: TorqueModel | None = None, *
     recordings, samples = recorded(robot, data)
     model = TorqueModel.of(robot, [Offset()]) if model is None else model
     rate = float(np.median([r.rate for r in recordings]))
-    m = int(np.ceil(largest * rate))
+    m = shifts_within(largest, rate)
     if any(r.n_samples <= 2 * (m + 1) for r in recordings):
         raise ValueError(f"a delay of up to {largest:g} s ({m} samples) needs recordings of "
                          f"more than {2 * (m + 1)} samples")
-    starts = np.cumsum([0] + [r.n_samples for r in recordings])
-    rows = np.concatenate([np.arange(a + m + 1, b - m - 1) for a, b in zip(starts, starts[1:])])
-    n = robot.n_joints
-    given = per_joint("limits", limits, n)
-    w = np.ones(n) if given is None else 1.0 / np.asarray(given, dtype=float)
+    given = per_joint("limits", limits, robot.n_joints)
+    return delay_of(samples, model, rate, m, None if given is None else np.asarray(given))
+
+
+def shifts_within(largest_s: float, rate: float) -> int:
+    """The whole-sample shifts tried each way for delays up to ``largest_s`` at ``rate``
+    (``ceil``: the bound is at least ``largest_s``)."""
+    return max(1, int(np.ceil(largest_s * rate)))
+
+
+def delay_of(samples: Samples, model: TorqueModel, rate: float, m: int,
+             limits: np.ndarray | None, train: np.ndarray | None = None) -> DelayEstimate:
+    """:func:`estimate_delay` on ``samples`` (whole recordings, their rows of ``model``
+    kept), shifts up to ``m`` samples, rows weighted by ``1 / limits``; ``train``: only
+    the samples this mask keeps, each with the ``m + 1`` around it (a validation's
+    training samples: no torque of a tested sample is read)."""
+    n_samples = samples.q.shape[0]
+    index = np.arange(n_samples)
+    recording = np.zeros(n_samples, int) if samples.recording is None else samples.recording
+    # a sample whose shifted neighbours all lie in its recording (and in ``train``)
+    inside = np.ones(n_samples, bool)
+    usable = np.ones(n_samples, bool) if train is None else np.asarray(train, bool)
+    for step in range(-m - 1, m + 2):
+        j = np.clip(index + step, 0, n_samples - 1)
+        inside &= (index + step >= 0) & (index + step < n_samples) & (recording[j] == recording)
+        inside &= usable[j]
+    rows = index[inside]
+    if rows.size == 0:
+        raise ValueError(f"no sample has {m + 1} neighbours each side to shift the torques by")
+    n = samples.q.shape[1]
+    w = np.ones(n) if limits is None else 1.0 / np.asarray(limits, dtype=float)
     Y = (samples.rows(model)[rows] * w[:, None]).reshape(-1, model.dim)
     Q, R, _ = scipy.linalg.qr(Y, mode="economic", pivoting=True)
     diag = np.abs(np.diag(R))
@@ -91,5 +137,5 @@ def estimate_delay(robot: Robot, data: Data, model: TorqueModel | None = None, *
         curvature = down - 2 * here + up
         if curvature > 0:
             vertex += 0.5 * (down - up) / curvature
-    return DelayEstimate(vertex / rate, vertex, shifts, losses,
-                         best in (0, shifts.size - 1))
+    return DelayEstimate(float(vertex / rate), float(vertex), shifts, losses,
+                         best in (0, shifts.size - 1), rate, b.size, Q.shape[1])

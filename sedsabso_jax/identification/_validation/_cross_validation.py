@@ -107,10 +107,14 @@ def score_of(metrics: Metrics) -> float:
 
 def cross_validation_of(estimator: Estimator, model: TorqueModel, samples: Samples,
                         splits: Splits, limits: np.ndarray | None, validation: dict, *,
-                        on_fit: Callable[[], object] | None = None) -> CrossValidation:
+                        on_fit: Callable[[], object] | None = None,
+                        made: Callable[[np.ndarray], Samples] | None = None
+                        ) -> CrossValidation:
     """Fit ``estimator`` and ``model`` to each split's training samples of ``samples``
     (the recordings, stacked) and predict its test samples; ``validation`` the settings
-    of the validation that made the splits; ``on_fit()`` after each fit."""
+    of the validation that made the splits; ``on_fit()`` after each fit; ``made(train)``:
+    the samples of a split instead, made knowing only its training mask (a delay
+    searched on them)."""
     measured, predicted, scores, tested = [], [], [], []
     every = np.arange(samples.q.shape[0])
     # many small factorisations: one BLAS thread each (docs/explanation/
@@ -119,10 +123,11 @@ def cross_validation_of(estimator: Estimator, model: TorqueModel, samples: Sampl
         if not model.waiting:
             samples.rows(model)  # the splits' rows are taken from the whole's
         for train, test in zip(splits.train, splits.test):
-            fitted = fit_model(estimator, model, samples.split(train), limits, warn=False)
-            measured.append(samples.tau[test])
+            these = samples if made is None else made(train)
+            fitted = fit_model(estimator, model, these.split(train), limits, warn=False)
+            measured.append(these.tau[test])
             tested.append(every[test])
-            predicted.append(samples.split(test).predict(fitted.model, fitted.fit.x))
+            predicted.append(these.split(test).predict(fitted.model, fitted.fit.x))
             scores.append(score_of(validation_metrics(measured[-1], predicted[-1], limits)))
             if on_fit is not None:
                 on_fit()
