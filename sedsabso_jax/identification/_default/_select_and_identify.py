@@ -62,10 +62,9 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
     worse), then the signal chain (:func:`~._signals.choose_chain`: the velocities and
     accelerations recorded or derived, the cutoff that derives them, the torques' delay;
     the held-out recordings made by the same chain), then the pull to the prior, fit on
-    all of ``data``, and
-    judge the fit on it, on the validation and on each held-out recording alone (never
-    used to choose or fit), and, for several, on their mean. The rules between the
-    options are :class:`Choice`'s.
+    all of ``data``, and judge the fit on it, on the validation and on each held-out
+    recording alone (never used to choose or fit), and, for several, on their mean. The
+    rules between the options are :class:`Choice`'s.
 
     Arguments:
         data: a :class:`~sedsabso_jax.Measurements`, several (one rate, fitted together;
