@@ -238,6 +238,8 @@ def test_a_delay_is_searched_and_kept_where_it_validates():
     assert not on_time.delayed and all(c.delay_s == 0.0 for c in on_time.chains[2:])
     with pytest.raises(ValueError, match="delay_s must be a finite number of seconds"):
         SignalChain(delay_s="soon")
+    with pytest.raises(ValueError, match="too short for a delay of 20 s"):
+        late.with_chain(SignalChain(delay_s=20.0))
 
 
 def test_the_chains_report_their_work():

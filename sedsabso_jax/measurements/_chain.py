@@ -176,6 +176,11 @@ class SignalChain(eqx.Module):
         if trim_s > 0.0:
             first = int(np.searchsorted(times, times[0] + trim_s, side="left"))
             last = int(np.searchsorted(times, times[-1] - trim_s, side="right"))
+            if last - first < 2 and abs(self.delay_s) >= trim_s:
+                raise ValueError(
+                    f"{source}: the recording ({times[-1] - times[0]:.3g} s) is too short for "
+                    f"a delay of {self.delay_s:g} s: no sample keeps a torque and the motion "
+                    f"{self.delay_s:g} s before it")
             if last - first < 2:
                 raise ValueError(
                     f"{source}: the recording ({times[-1] - times[0]:.3g} s) is too short to "
