@@ -5,9 +5,9 @@ torque sensors) and the Staubli TX40 (motor side, coupled wrist).
 The default (``sj.select_and_identify``) chooses method, weighting, torque model and
 physical consistency by the phase folds and the speed splits pooled (``sj.Pooled``:
 folds of the motion's phase, and each joint's fast samples predicted by a fit to its slow
-ones); with ``--signals auto`` it also chooses the signal chain (velocities and
-accelerations recorded or derived, and the cutoff), and the part it is judged on is made
-by the chain it chose. Its generalisation is
+ones), then the signal chain (velocities and accelerations recorded or derived, the
+cutoff and the torques' delay; ``--signals as-loaded``: the signals as loaded), and the
+part it is judged on is made by the chain it chose. Its generalisation is
 measured on each recording by NESTED validation, the whole choice and fit made on one
 part and judged on another that no choice or fit saw, in two ways:
 
@@ -180,8 +180,9 @@ def main(argv=None):
     ap.add_argument("--settings", default=",".join(WORDS),
                     help="the settings compared, comma-separated words of "
                          f"{', '.join(WORDS)} (default: all; 'default' must be one)")
-    ap.add_argument("--signals", choices=("as-loaded", "auto"), default="as-loaded",
-                    help="the default's signal chain: as loaded, or chosen by validation")
+    ap.add_argument("--signals", choices=("auto", "as-loaded"), default="auto",
+                    help="the default's signal chain: chosen by validation (auto), or as "
+                         "loaded")
     ap.add_argument("--robots", default=",".join(ROBOTS),
                     help=f"the robots, comma-separated words of {', '.join(ROBOTS)}")
     args = ap.parse_args(argv)
@@ -215,7 +216,7 @@ def main(argv=None):
            "versions": {"sedsabso_jax": sj.__version__},
            "command": "python -m benchmarks.real_robots" + (
                "" if settings == SETTINGS else f" --settings {args.settings}") + (
-               "" if args.signals == "as-loaded" else f" --signals {args.signals}") + (
+               "" if args.signals == "auto" else f" --signals {args.signals}") + (
                "" if robots == list(ROBOTS) else f" --robots {args.robots}")}
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(to_json(doc))

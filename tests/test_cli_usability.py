@@ -259,18 +259,19 @@ def test_yaml_config_without_pyyaml_says_what_to_do(tmp_path, monkeypatch, capsy
 def test_select_and_identify_reports_its_work(data_file):
     """``progress`` reports work in estimated seconds, each fit's known before it runs:
     the splits' conic fits (the first sets the conic solver up), the fit on all the data,
-    the evaluation; ``done`` grows to ``total``."""
+    the evaluation; ``done`` grows to ``total``. The signals as loaded: the chain's
+    choice reports its own work (tests/test_signal_chain.py)."""
     from sedsabso_jax.identification import _work
 
     calls: list[tuple[str, float, float]] = []
     data = sj.load_measurements(data_file, n_joints=3)
     robot = sj.robots.rs010n()
     plain = sj.TorqueModel.of(robot)
+    loaded = sj.identification.DefaultValidation(signals=None)
     quiet = sj.select_and_identify(robot, data, estimators=sj.OLS(), models=plain,
-                                   physical=True, prior_strength=1e-3)
+                                   physical=True, prior_strength=1e-3, validation=loaded)
     report = sj.select_and_identify(robot, data, estimators=sj.OLS(), models=plain,
-                                    physical=True,
-                                    prior_strength=1e-3,
+                                    physical=True, prior_strength=1e-3, validation=loaded,
                                     progress=lambda *call: calls.append(call))
     # 3 speed splits' and 5 phase folds' conic fits, the candidate validated (the work
     # after it revised), the fit on all the data, the evaluation
@@ -297,7 +298,7 @@ def test_model_choice_and_prior_report_their_work(data_file):
     robot = sj.robots.rs010n()
     sj.select_and_identify(robot, data, estimators=(sj.OLS(), sj.WLS()),
                            models=sj.identification.candidate_models(robot, [(), [sj.Offset()]]),
-                           validation=sj.identification.DefaultValidation(3),
+                           validation=sj.identification.DefaultValidation(3, signals=None),
                            physical=True, prior_strength=1e-3,
                            progress=lambda *call: calls.append(call))
     labels = [c[0] for c in calls]

@@ -98,8 +98,11 @@ def test_kuka_real_data_end_to_end(kuka_identified):
         "positions, velocities, accelerations and torques as recorded; torques and "
         "positions taken as simultaneous (no delay). This is the measurement's")
     assert "signals: positions, velocities, accelerations and torques" in printed
-    # the signals as loaded: the chain is chosen only with --signals auto
-    assert doc["signals"]["choice"] is None and "signals chosen by" not in printed
+    # the chain chosen (--signals auto, the default): the logger's signals kept, the
+    # delay searched with the chosen model and not kept
+    choice = doc["signals"]["choice"]
+    assert choice["chosen"] == "recorded" and "signals chosen by validation" in printed
+    assert [s["kept"] for s in choice["delay_searches"]] == [False]
     assert len(doc["base_parameters"]["names"]) == len(doc["base_parameters"]["values"])
     val = doc["validation"]
     assert len(val["nrms_range_percent"]) == len(val["relative_rms_percent"]) == 7

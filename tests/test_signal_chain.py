@@ -1,7 +1,7 @@
 """The signal chain (``sj.measurements.SignalChain``): the loader is a chain applied to the
 recorded signals, which the measurements keep; the default's validation chooses the
-chain and the torques' delay (``DefaultValidation(signals="auto")``, not the default
-yet), against figures computed here from the true motion."""
+chain and the torques' delay (``DefaultValidation()``'s ``signals="auto"``, the
+default), against figures computed here from the true motion."""
 
 from __future__ import annotations
 
@@ -15,10 +15,9 @@ ROBOT = sj.robots.rs010n()
 LIMITS = np.array([300.0, 300.0, 150.0])
 #: One candidate model and estimator: the chain is the only choice.
 FAST = dict(estimators=sj.OLS(), models=sj.TorqueModel.of(ROBOT), physical=False)
-#: The default's validation with the signal chain chosen (not the default yet), and as
-#: it is: the signals as given.
-CHOSEN = sj.identification.DefaultValidation(signals="auto")
-AS_GIVEN = sj.identification.DefaultValidation()
+#: The default's validation, the signal chain chosen, and with the signals as given.
+CHOSEN = sj.identification.DefaultValidation()
+AS_GIVEN = sj.identification.DefaultValidation(signals=None)
 RATE = 200.0
 
 
@@ -119,14 +118,13 @@ def test_the_choice_derives_what_the_recording_gets_wrong():
     good = _recording(30.0, 4, lagging_qdd=False)
     t, q, qd, qdd = _motion(15.0, 5, scale=1.3)
     new = sj.Measurements(t, q, qd, qdd, _torques(q, qd, qdd, 6))
-    chosen = sj.select_and_identify(ROBOT, bad, held_out=new, limits=LIMITS, **FAST,
-                                    validation=CHOSEN)
-    sel = chosen.chain_selection
+    chosen = sj.select_and_identify(ROBOT, bad, held_out=new, limits=LIMITS, **FAST)
+    sel = chosen.chain_selection  # the default chooses (CHOSEN)
     assert sel.labels[0] == "recorded" and sel.labels[sel.chosen].startswith("derived")
     assert all(np.array_equal(cv.tested, sel.validations[0].tested) for cv in sel.validations)
     as_given = sj.select_and_identify(ROBOT, bad, held_out=new, limits=LIMITS, **FAST,
                                       validation=AS_GIVEN)
-    assert as_given.chain_selection is None  # the default takes the signals as given
+    assert as_given.chain_selection is None  # signals=None: taken as given
     assert chosen.validation.nrms_limits_percent < 0.5 * as_given.validation.nrms_limits_percent
     assert "derived" in chosen.text().split("signals chosen by validation")[1][:2000]
     document = chosen.document({})
@@ -259,9 +257,9 @@ def test_the_chains_report_their_work():
     assert calls[0][2] > chains_work
 
 
-def test_the_command_chooses_on_request(tmp_path, capsys):
-    """``identify --signals auto`` chooses the chain (the report's table, the JSON's
-    ``signals.choice``); without it (``--signals as-loaded``), or with ``--cutoff-hz``
+def test_the_command_chooses_by_default(tmp_path, capsys):
+    """``identify`` chooses the chain (``--signals auto``, the default: the report's table,
+    the JSON's ``signals.choice``); with ``--signals as-loaded``, or with ``--cutoff-hz``
     given, the signals are taken as loaded."""
     import json
 
@@ -272,8 +270,8 @@ def test_the_command_chooses_on_request(tmp_path, capsys):
     flags = ["identify", "--robot", "rs010n", "--data", str(tmp_path / "run.npz"),
              "--friction", "viscous-coulomb", "--method", "OLS", "--weights", "equal",
              "--no-physical"]
-    for extra, chosen in (([], False), (["--signals", "auto"], True),
-                          (["--signals", "auto", "--cutoff-hz", "10"], False)):
+    for extra, chosen in (([], True), (["--signals", "as-loaded"], False),
+                          (["--cutoff-hz", "10"], False)):
         js = tmp_path / "r.json"
         assert cli.main([*flags, *extra, "--json", str(js)]) == 0
         printed = capsys.readouterr().out

@@ -259,9 +259,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      f"above {words.PREDICT_ABOVE:g}; "
                      "phase: folds of the motion's phase; recordings: leave one --data file "
                      "out")
-    val.add_argument("--signals", choices=("as-loaded", "auto"), default="as-loaded",
-                     help="auto: qd, qdd recorded or derived at 5, 10 Hz, and the torques' "
-                     "delay, chosen by validation (as-loaded)")
+    val.add_argument("--signals", choices=("auto", "as-loaded"), default="auto",
+                     help="qd, qdd recorded or derived (5, 10 Hz) and the torques' delay: "
+                     "auto (default) chooses by validation")
     val.add_argument("--folds", metavar="K", type=non_negative_int, default=words.FOLDS,
                      help=f"folds over the motion's phase ({words.FOLDS}); 0: no validation "
                      "at all")

@@ -152,8 +152,8 @@ def add_loading(group: argparse._ArgumentGroup) -> None:
     """The flags of how files are loaded: filtering, resampling, edges."""
     group.add_argument("--cutoff-hz", metavar="HZ", type=positive_float, default=None,
                        help="low-pass cutoff where velocities/accelerations are derived or "
-                       "torques filtered (default 10 Hz; given, identify --signals auto "
-                       "keeps it)")
+                       "torques filtered (default 10 Hz, identify chooses among 5 and "
+                       "10 Hz; given, identify keeps it)")
     group.add_argument("--filter-torques", action="store_true", help="low-pass the torques")
     group.add_argument("--downsample", metavar="K", type=positive_int, default=1,
                        help="keep every k-th sample after filtering (1)")

@@ -50,18 +50,16 @@ class DefaultValidation(eqx.Module):
     :data:`~sedsabso_jax.identification.KEPT_TERMS`: friction at rest with its
     displacements searched; None: nothing) added to the choice and kept unless it
     validates worse. After them, ``signals``: the signal chains chosen among
-    (:func:`~._signals.choose_chain`; None, the default: none, the signals as given;
-    :data:`AUTO`: :meth:`~._policy.Default.chains` and the torques' delay, where every
-    recording keeps its recorded signals and was loaded without choosing a chain, else
-    none; one :class:`~sedsabso_jax.measurements.SignalChain` or several, the first kept
-    unless another validates better, no delay searched). Not the default yet: its nested
-    validation on the three shipped robots with the delay is not complete
-    (docs/explanation/identification-defaults.md)."""
+    (:func:`~._signals.choose_chain`; :data:`AUTO`, the default:
+    :meth:`~._policy.Default.chains` and the torques' delay, where every recording keeps
+    its recorded signals and was loaded without choosing a chain, else none; None: none,
+    the signals as given; one :class:`~sedsabso_jax.measurements.SignalChain` or
+    several, the first kept unless another validates better, no delay searched)."""
 
     folds: int = eqx.field(default=DEFAULT.folds, converter=as_int)
     kept: KeptTerms | None = KEPT_TERMS
     interpolation: Validation | None = None
-    signals: Any = eqx.field(default=None, converter=_signals)
+    signals: Any = eqx.field(default=AUTO, converter=_signals)
     kind: ClassVar[str] = "default"
     min_recordings: ClassVar[int] = 1
 

@@ -50,7 +50,7 @@ class Default(eqx.Module):
     ``fit_below`` and predict above ``predict_above`` of each joint's peak speed, the
     ``peak_quantile`` quantile of ``|qd|``.
 
-    Signal chains (chosen on request, ``DefaultValidation(signals="auto")``): the loaded
+    Signal chains (:class:`~._choice.DefaultValidation`'s ``signals``): the loaded
     one, recorded and derived velocities and accelerations at each of ``cutoffs`` Hz
     (:meth:`chains`), then the torques' delay searched up to ``largest_delay_s`` either
     way.
