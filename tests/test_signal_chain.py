@@ -300,3 +300,32 @@ def test_splits_left_without_samples_are_dropped():
     assert left.names == ("phase 1", "phase 2") and left.parts == ("phase folds",) * 2
     np.testing.assert_array_equal(left.test[0], middle[keep])
     assert all(t.shape == (6,) for t in left.train + left.test)
+
+
+def test_the_fit_on_all_the_data_reuses_the_chains_search(monkeypatch):
+    """The model's nonlinear parameters are searched once on all the data where the
+    loaded chain is kept: the chain's validation holds them where that search puts them,
+    and the final fit takes the same search (the same samples), its report included."""
+    from sedsabso_jax.identification import parse_friction
+    from sedsabso_jax.identification._fit import _fit
+
+    searched = []
+    original = _fit._searched
+
+    def counted(model, samples, weights):
+        if samples.whole is None:  # all the data, not a split
+            searched.append(len(samples.tau))
+        return original(model, samples, weights)
+
+    monkeypatch.setattr(_fit, "_searched", counted)
+    model = sj.TorqueModel.of(ROBOT, parse_friction("viscous-coulomb+smooth:fit"))
+    report = sj.select_and_identify(ROBOT, _recording(20.0, 14, lagging_qdd=False),
+                                    limits=LIMITS, estimators=sj.OLS(), models=model,
+                                    physical=False)
+    assert report.chain_selection.chosen == 0 and len(searched) == 1
+    assert report.ident.settings["searched"]["evaluations"] > 0
+    with pytest.raises(ValueError, match="samples of"):
+        sj.identification._fit._identify.identified(
+            ROBOT, _recording(10.0, 15, lagging_qdd=False), sj.OLS(), model, LIMITS,
+            samples=sj.identification._fit._samples.Samples.of(
+                ROBOT, _recording(20.0, 14, lagging_qdd=False)))

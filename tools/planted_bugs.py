@@ -378,7 +378,8 @@ BUGS = [
      "        at_rest = rests(data, held,", "        at_rest = rests(data, named[0][1],",
      "every held-out recording's error weighed to the first one's speeds", HELD_OUT, None),
     ("identification/_default/_select_and_identify.py",
-     "    ident = identified(robot, recordings, estimator, model, limits)[0]",
+     "    ident = identified(robot, recordings, estimator, model, limits,  # data checked "
+     "above\n                       samples=samples)[0]",
      "    ident = identified(robot, [*recordings, *held.values()], estimator, model, "
      "limits)[0]", "the held-out recordings fitted too", HELD_OUT, None),
     ("identification/_default/_held_out.py",
@@ -634,7 +635,11 @@ BUGS = [
      CHAIN, None),
     ("identification/_default/_signals.py",
      "            kept, index = not DEFAULT.not_worse(cv, tried[-1][2]), len(tried) - 1\n",
-     "            kept, index = True, len(tried) - 1\n", "the delay kept whatever the validation says", CHAIN, None),
+     "            kept, index = True, len(tried) - 1\n",
+     "the delay kept whatever the validation says", CHAIN, None),
+    ("identification/_default/_select_and_identify.py",
+     "                       samples=samples)[0]", "                       samples=None)[0]",
+     "the fit on all the data searching again what the chain's fit searched", CHAIN, None),
 ]
 
 

@@ -23,6 +23,7 @@ from ...measurements._container import Measurements
 from .._data_checks import check_selection_data
 from .._estimators._estimator import Estimator, Limits, ProgressCallback, per_joint
 from .._fit._identify import identified
+from .._fit._samples import recorded
 from .._model._candidates import candidate_models
 from .._model._checks import model_of
 from .._model._torque_model import TorqueModel
@@ -147,6 +148,8 @@ def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: 
         estimators, models + (() if kept is None else kept.models(models[-1])), rows,
         held_rows, prior_fits + chain_fits) if progress is not None else 0.0)
     selection = cv = signals = None
+    # the samples of all the data: the final fit reuses the chain's search of the model
+    samples = recorded(robot, recordings)[1]
     if chosen_by is None:
         estimator, model = estimators[0], models[0]
     else:
@@ -159,8 +162,9 @@ def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: 
             signals, recordings, chosen_by = choose_chain(
                 robot, recordings, chains, selection.estimator, selection.model, chosen_by,
                 per_joint("limits", limits, robot.n_joints), fits,
-                DEFAULT.largest_delay_s if delay else None)
+                DEFAULT.largest_delay_s if delay else None, samples)
             if signals is not None and signals.chosen:
+                samples = recorded(robot, recordings)[1]
                 held = {k: r.with_chain(signals.chain, given=False)
                         if r.recorded is not None else r for k, r in held.items()}
                 selection = revalidated(selection, robot, recordings, chosen_by, limits,
@@ -180,7 +184,8 @@ def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: 
                                                 validation=chosen_by,  # type: ignore[arg-type]
                                                 limits=limits, progress=fits)
         estimator, cv = prior_selection.estimator, prior_selection.cross_validation
-    ident = identified(robot, recordings, estimator, model, limits)[0]  # data checked above
+    ident = identified(robot, recordings, estimator, model, limits,  # data checked above
+                       samples=samples)[0]
     fits.step("fit on all the data", final, evaluation)
     report = IdentificationReport.evaluate(ident, recordings, held or None, limits,
                                            cross_validation=cv, selection=selection,

@@ -205,18 +205,20 @@ class OnSamples(Validation):
 def choose_chain(robot: Robot, recordings: list[Measurements],
                  chains: Sequence[SignalChain], estimator: Estimator, model: TorqueModel,
                  validation: Validation, limits: np.ndarray | None, fits: Fits,
-                 largest_delay_s: float | None = None
+                 largest_delay_s: float | None = None, samples: Samples | None = None
                  ) -> tuple[ChainSelection | None, list[Measurements], Validation]:
     """Validate ``estimator`` and ``model`` on ``recordings`` made again by each of
     ``chains`` (the first: as loaded) and choose, the delay searched first up to
-    ``largest_delay_s`` (None: not searched) (module docstring). Returns the selection,
+    ``largest_delay_s`` (None: not searched) (module docstring); ``samples``: the
+    recordings' (:func:`~.._fit._samples.recorded`), where the model's nonlinear
+    parameters are searched (given: kept there for a later fit). Returns the selection,
     and the recordings and the validation to go on with: as given where the loaded chain
     is kept, else the chosen chain's recordings on the samples compared and the splits
     they were compared by (:class:`OnSamples`); no selection (None) where fewer than two
     splits keep samples to fit and to predict once the ends are trimmed."""
     # the chosen model's nonlinear parameters held where the loaded signals put them
-    model = fit_model(estimator, model, recorded(robot, recordings)[1], limits,
-                      warn=False).model
+    model = fit_model(estimator, model, recorded(robot, recordings)[1] if samples is None
+                      else samples, limits, warn=False).model
     trim = common_trim(recordings, chains, largest_delay_s or 0.0)
 
     def made_by(chain: SignalChain) -> list[Measurements]:

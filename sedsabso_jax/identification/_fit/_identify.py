@@ -41,7 +41,7 @@ from .._model._checks import model_of, regrouped_message
 from .._model._torque_model import TorqueModel
 from .._recordings import Data
 from ._fit import fit as fit_model
-from ._samples import recorded
+from ._samples import Samples, recorded
 from ._uncertainty import parameter_std, relative_std_percent, searched_std
 
 
@@ -220,15 +220,22 @@ def identify(robot: Robot, data: Data, estimator: Estimator = OLS(),
 
 
 def identified(robot: Robot, data: Data, estimator: Estimator, model: TorqueModel | None,
-               limits: Limits, *, check: bool = False) -> tuple[Identification, EstimatorFit]:
+               limits: Limits, *, check: bool = False, samples: Samples | None = None
+               ) -> tuple[Identification, EstimatorFit]:
     """:func:`identify`'s result and the estimator's fit behind it (its weighted rows,
     for what a caller derives from the values); ``check``: the data checked first
-    (:func:`~.._data_checks.check_fit_data`)."""
+    (:func:`~.._data_checks.check_fit_data`); ``samples``: ``data``'s
+    (:func:`~._samples.recorded`), given to reuse what was computed on them (the rows,
+    a search of the same model)."""
     checked_estimator(estimator)
     model = model_of(robot, model)
     limits = per_joint("limits", limits, robot.n_joints)
     estimator.check(model, limits)  # what can be checked before any data are read
-    recordings, samples = recorded(robot, data)
+    recordings, found = recorded(robot, data)
+    samples = found if samples is None else samples
+    if samples.tau.shape != found.tau.shape:
+        raise ValueError(f"samples of {samples.tau.shape[0]} samples given for data of "
+                         f"{found.tau.shape[0]}")
     model.check_recordings(len(recordings))
     if check:
         check_fit_data(robot, recordings, model.dim, model.base, limits,
