@@ -240,3 +240,9 @@ def test_load_columns_do_not_depend_on_the_load_point(rs010n):
     unloaded = model.reading(np.zeros(model.dim))
     assert unloaded.names == model.names and not model.regrouped
     assert unloaded.regressor(*motion(robot.n_joints)[:3]).shape[-1] == model.dim
+    # a reading keeps the model's regrouping (not found again): built at that load
+    # point, the model finds the same
+    point = unloaded.terms[-1].load_point
+    built = sj.TorqueModel.of(robot, (sj.Offset(), sj.LoadFriction(load_point=point)),
+                              base=base)
+    assert built.names == model.names

@@ -86,9 +86,22 @@ class Samples:
         found = self.root._kept.get(("rows", model.structure))
         if found is not None:
             return found if self.whole is None else found[self.mask]
-        if self.whole is not None or not cache:
+        if self.whole is None and cache:
+            return self.kept("rows", model.structure, lambda: self._rows(model, False))
+        if not (cache and self.small):
             return self._rows(model, False)
-        return self.kept("rows", model.structure, lambda: self._rows(model, False))
+        # a split of at most half of the whole (a validation's test rows) keeps the rows
+        # of the last model it read: each estimator's fit of a model whose terms read one
+        # first fit (the same on every estimator) predicts it in turn
+        last = self._kept.get("last rows")
+        if last is None or last[0] != model.structure:
+            last = self._kept["last rows"] = (model.structure, self._rows(model, False))
+        return last[1]
+
+    @property
+    def small(self) -> bool:
+        """Whether these samples are a split of at most half of the whole."""
+        return self.mask is not None and 2 * int(self.mask.sum()) <= self.root.q.shape[0]
 
     def has_rows(self, model: TorqueModel) -> bool:
         """Whether the whole's rows of ``model`` are kept."""
@@ -120,8 +133,7 @@ class Samples:
         those of the samples it leaves out."""
         whole = self.whole
         rows = None if whole is None else whole._kept.get(("rows", model.structure))
-        if whole is None or rows is None or self.mask is None \
-                or 2 * int(self.mask.sum()) <= whole.q.shape[0]:
+        if whole is None or rows is None or self.small:
             return self.kept("normal", model.structure,
                              lambda: NormalEquations.of(self.rows(model), self.tau))
         out = ~self.mask

@@ -97,7 +97,8 @@ class Signals:
         if self.rigid is None:
             raise ValueError("these signals carry no rigid-body rows")
         if isinstance(self.rigid, np.ndarray):  # measured rows: no copy into JAX
-            return self.rigid @ np.asarray(values, dtype=float)
+            rows = self.rigid.reshape(-1, self.rigid.shape[-1])  # one matrix-vector product
+            return (rows @ np.asarray(values, dtype=float)).reshape(self.rigid.shape[:-1])
         return self.rigid @ jnp.asarray(values)
 
     def increments(self) -> tuple[np.ndarray, np.ndarray]:

@@ -295,7 +295,8 @@ class TorqueModel(eqx.Module):
         s = Signals(q, qd, qdd, recording, coulomb, None, probe, steps)
         if base_rows is None:
             return s
-        rigid = base_rows[..., self.rigid_columns]
+        rigid = (np.take(base_rows, self.rigid_columns, axis=-1)  # faster than indexing
+                 if isinstance(base_rows, np.ndarray) else base_rows[..., self.rigid_columns])
         bodies = [term.columns(self, s) for term in self.terms if term.body]
         if bodies:
             rigid = jnp.concatenate([rigid, *bodies], -1)
@@ -397,4 +398,8 @@ class TorqueModel(eqx.Module):
         terms = tuple(t.reading(self, values) if only(t) else t for t in self.terms)
         if all(a is b for a, b in zip(terms, self.terms)):
             return self
-        return dataclasses.replace(self, terms=terms)
+        read = dataclasses.replace(self, terms=terms)
+        # which columns the base spans does not depend on the values read (found with a
+        # probe torque, :mod:`._regrouping`): not found again for every reading
+        read.__dict__["kept"] = self.kept
+        return read
