@@ -25,6 +25,10 @@ figure measures repeatability, not generalisation.
 
     python -m benchmarks.real_robots [--json benchmarks/results/real_robots.json]
 
+``--kept bound`` or ``--kept smooth`` gives the default alternatives to its friction at rest
+(searched up to 20 mrad) for the validation to choose among: the same searched up to 0.5
+rad, or with the smooth Coulomb's velocity scales searched too (issue 45).
+
 Figures: NRMS over the joint torque limits [%] (RMS error / (2 limit), mean over joints).
 """
 
@@ -42,8 +46,9 @@ import numpy as np
 import sedsabso_jax as sj
 from benchmarks.output import to_json
 from data import real_robots
+from sedsabso_jax import Presliding
 from sedsabso_jax.dynamics import joint_limits
-from sedsabso_jax.identification import candidate_models
+from sedsabso_jax.identification import KEPT_TERMS, KeptTerms, candidate_models
 
 DEFAULT = "default"
 BY_SPEED = "the same candidates chosen by speed splits alone"
@@ -54,6 +59,14 @@ SETTINGS = (DEFAULT, BY_SPEED, BY_PHASE, PREVIOUS, PLAIN)
 #: ``--settings``' words for them.
 WORDS = dict(zip(("default", "speed", "phase", "previous", "plain"), SETTINGS))
 
+
+#: ``--kept``'s words: the default's kept terms, or alternatives the validation chooses
+#: among (friction at rest searched up to 20 mrad, or up to 0.5 rad; or up to 20 mrad,
+#: alone or with the smooth Coulomb's velocity scales searched).
+_AT_REST = Presliding(fitted=True, largest=0.02)
+KEPT = {"default": None,
+        "bound": KeptTerms([(_AT_REST,), (Presliding(fitted=True, largest=0.5),)]),
+        "smooth": KeptTerms([(_AT_REST,), (_AT_REST, sj.SmoothCoulomb(fitted=True))])}
 
 #: ``--robots``' words.
 ROBOTS = ("kuka", "panda", "tx40")
@@ -92,11 +105,12 @@ def judged_on(fit, data: sj.Measurements) -> sj.Measurements:
 
 
 def fits(robot, train: sj.Measurements, limits, transmission, base, inner,
-         settings=SETTINGS, signals=None) -> dict:
+         settings=SETTINGS, signals=None, kept=None) -> dict:
     """The ``settings`` on ``train``: the reports of the choices, plain OLS's
     identification; ``inner``: the phase folds (a count, or labels) of the choices by
     phase folds and of the default's second validation; ``signals``: the default's
-    (``DefaultValidation(signals=...)``: None, as loaded, or ``"auto"``, chosen)."""
+    (``DefaultValidation(signals=...)``: None, as loaded, or ``"auto"``, chosen);
+    ``kept``: the default's kept terms (None: its own, ``KEPT_TERMS``)."""
     models = candidate_models(robot, transmission=transmission, base=base)
     common = dict(limits=limits.torque_limits, models=models)
     phase = sj.GivenFolds(inner) if np.ndim(inner) == 1 else sj.PhaseFolds(inner)
@@ -105,7 +119,8 @@ def fits(robot, train: sj.Measurements, limits, transmission, base, inner,
         # the default: its candidates, then friction at rest kept unless worse
         made = {DEFAULT: lambda: sj.select_and_identify(
                     robot, train, validation=sj.identification.DefaultValidation(
-                        interpolation=phase, signals=signals), **common),
+                        interpolation=phase, signals=signals,
+                        kept=KEPT_TERMS if kept is None else kept), **common),
                 BY_SPEED: lambda: sj.select_and_identify(
                     robot, train, validation=sj.SpeedSplits(), **common),
                 BY_PHASE: lambda: sj.select_and_identify(robot, train, validation=phase,
@@ -123,7 +138,7 @@ def _ident(fit):
 
 
 def evaluate(name, robot, data, limits, transmission, runs, folds=5,
-             settings=SETTINGS, signals=None) -> dict:
+             settings=SETTINGS, signals=None, kept=None) -> dict:
     base = sj.base_parameters(robot)
     t0 = time.perf_counter()
     phase = sj.PhaseFolds(folds).splits([data])
@@ -137,7 +152,7 @@ def evaluate(name, robot, data, limits, transmission, runs, folds=5,
             inner = (np.searchsorted(np.unique(phase.labels[train]), phase.labels[train])
                      if kind == "phase" else folds)
             found = fits(robot, data.subset(train), limits, transmission, base, inner,
-                         settings, signals)
+                         settings, signals, kept)
             for label, fit in found.items():
                 held[kind][label].append(nrms(_ident(fit), judged_on(fit, data.subset(test)),
                                               limits))
@@ -146,7 +161,7 @@ def evaluate(name, robot, data, limits, transmission, runs, folds=5,
                                  is None else chain.labels[chain.chosen]})
             predicted[kind].append(found[DEFAULT].cross_validation.score)
     nested_s = time.perf_counter() - t0
-    full = fits(robot, data, limits, transmission, base, folds, settings, signals)
+    full = fits(robot, data, limits, transmission, base, folds, settings, signals, kept)
     other_runs = {run: {label: nrms(_ident(f), judged_on(f, d), limits)
                         for label, f in full.items()} for run, d in runs.items()}
     report = full[DEFAULT]
@@ -183,6 +198,9 @@ def main(argv=None):
     ap.add_argument("--signals", choices=("auto", "as-loaded"), default="auto",
                     help="the default's signal chain: chosen by validation (auto), or as "
                          "loaded")
+    ap.add_argument("--kept", choices=tuple(KEPT), default="default",
+                    help="the default's terms kept unless worse: its own (default), or "
+                         "alternatives the validation chooses among (module docstring)")
     ap.add_argument("--robots", default=",".join(ROBOTS),
                     help=f"the robots, comma-separated words of {', '.join(ROBOTS)}")
     args = ap.parse_args(argv)
@@ -201,7 +219,8 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as tmp:
         for name, robot, data, limits, tr, runs in datasets(Path(tmp), robots):
             rows.append(evaluate(name, robot, data, limits, tr, runs, settings=settings,
-                                 signals="auto" if args.signals == "auto" else None))
+                                 signals="auto" if args.signals == "auto" else None,
+                                 kept=KEPT[args.kept]))
             r = rows[-1]
             print(f"{name}: chosen {r['chosen_on_all_data']}, predicted "
                   f"{r['predicted_percent']:.4f} %, nested {r['nested_seconds']:.0f} s",
@@ -217,6 +236,7 @@ def main(argv=None):
            "command": "python -m benchmarks.real_robots" + (
                "" if settings == SETTINGS else f" --settings {args.settings}") + (
                "" if args.signals == "auto" else f" --signals {args.signals}") + (
+               "" if args.kept == "default" else f" --kept {args.kept}") + (
                "" if robots == list(ROBOTS) else f" --robots {args.robots}")}
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(to_json(doc))

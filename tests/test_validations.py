@@ -157,6 +157,25 @@ def test_physical_fit_is_the_same_on_rows_and_normal_equations_and_repeats_exact
     np.testing.assert_allclose(Y @ compressed, Y @ rows[0], atol=1e-7 * np.abs(data.tau).max())
 
 
+
+def test_a_split_predicts_each_model_with_its_own_rows():
+    """A split keeps the rows of the last model it predicted (a validation's estimators
+    predict one model in turn): models that read their fitted values (the load), taken in
+    turn and again, each give their own torques on the split (numpy on the split's
+    samples, from the model's own regressor)."""
+    data = _run(7, noise=0.05)
+    robot = sj.robots.rs010n()
+    samples = Samples.of(robot, data)
+    test = samples.split(np.arange(data.n_samples) % 3 == 0)
+    models = [sj.TorqueModel.of(robot, terms) for terms in (
+        (sj.Offset(), sj.LoadFriction()), (sj.LoadFriction(viscous=True),))]
+    rng = np.random.default_rng(0)
+    values = [rng.normal(size=m.dim) for m in models]
+    for k in (0, 1, 0, 1):
+        expected = models[k].predict(values[k], test.q, test.qd, test.qdd)
+        np.testing.assert_allclose(test.predict(models[k], values[k]), expected,
+                                   rtol=1e-12, atol=1e-12)
+
 # ----------------------------------------------------------------- several recordings
 def test_one_offset_per_recording():
     """Two recordings whose torque sensors' zeros differ (+2 and -1 N m on joint 1, whose

@@ -640,6 +640,10 @@ BUGS = [
     ("identification/_default/_select_and_identify.py",
      "                       samples=samples)[0]", "                       samples=None)[0]",
      "the fit on all the data searching again what the chain's fit searched", CHAIN, None),
+    ("identification/_fit/_samples.py",
+     "        if last is None or last[0] != model.structure:",
+     "        if last is None:", "a split predicting with the rows of the model it read last",
+     VALIDATIONS, None),
 ]
 
 

@@ -109,8 +109,7 @@ class TorqueModel(eqx.Module):
             raise ValueError("one torque offset per recording needs the Offset() term in the "
                              "torque model")
         if self.transmission is not None:
-            n = self.robot.n_joints
-            K = self.transmission
+            n, K = self.robot.n_joints, self.transmission
             if not isinstance(K, np.ndarray) or K.shape != (n, n) or not np.all(np.isfinite(K)):
                 raise ValueError(f"transmission must be a finite ({n}, {n}) matrix for robot "
                                  f"{self.robot.name!r}, got {K!r}")
@@ -295,8 +294,7 @@ class TorqueModel(eqx.Module):
         s = Signals(q, qd, qdd, recording, coulomb, None, probe, steps)
         if base_rows is None:
             return s
-        rigid = (np.take(base_rows, self.rigid_columns, axis=-1)  # faster than indexing
-                 if isinstance(base_rows, np.ndarray) else base_rows[..., self.rigid_columns])
+        rigid = np.take(base_rows, self.rigid_columns, axis=-1)  # faster than indexing
         bodies = [term.columns(self, s) for term in self.terms if term.body]
         if bodies:
             rigid = jnp.concatenate([rigid, *bodies], -1)
@@ -372,8 +370,7 @@ class TorqueModel(eqx.Module):
             k += m
         if k != np.shape(values)[0]:
             raise ValueError(f"expected {k} nonlinear parameters, got {np.shape(values)[0]}")
-        # the terms in their places (each checked itself): floats, or a compiled search's
-        # traced values alike
+        # the terms in their places (each checked itself): floats or traced values alike
         return eqx.tree_at(lambda m: m.terms, self, tuple(terms))
 
     @property
@@ -399,7 +396,5 @@ class TorqueModel(eqx.Module):
         if all(a is b for a, b in zip(terms, self.terms)):
             return self
         read = dataclasses.replace(self, terms=terms)
-        # which columns the base spans does not depend on the values read (found with a
-        # probe torque, :mod:`._regrouping`): not found again for every reading
-        read.__dict__["kept"] = self.kept
+        read.__dict__["kept"] = self.kept  # found with a probe torque, not the values read
         return read
