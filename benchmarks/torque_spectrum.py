@@ -12,7 +12,9 @@ The rules, per joint, on the Welch spectrum of the torques (mean removed, 8 s se
 A robot's cutoff by a rule is the median over its joints. Its chain (derived at that
 cutoff, where it lies below half the rate) is validated by the default
 (``DefaultValidation(signals=...)`` given the candidates' chains and it, the model and
-estimator chosen by the grid as usual) on the whole recording: the chains' table scores.
+estimator chosen by the grid as usual) on the whole recording: the chains' table scores,
+and the error on another run where there is one (the KUKA's run 2, made by the chosen
+chain).
 
     python -m benchmarks.torque_spectrum [--robots kuka,panda,tx40] [--json PATH]
 """
@@ -31,8 +33,9 @@ from scipy import signal
 
 import sedsabso_jax as sj
 from benchmarks.output import to_json
-from benchmarks.real_robots import ROBOTS, datasets
+from benchmarks.real_robots import ROBOTS, datasets, judged_on, nrms
 from sedsabso_jax.identification import candidate_models
+from sedsabso_jax.measurements import SignalChain
 
 FRACTIONS = (0.9, 0.99, 0.999)
 FLOORS = (10.0, 100.0, 1000.0)
@@ -65,7 +68,7 @@ def main(argv=None) -> dict:
     robots = tuple(args.robots.split(","))
     out: dict = {"robots": {}}
     with tempfile.TemporaryDirectory() as tmp:
-        for name, robot, data, limits, transmission, _ in datasets(Path(tmp), robots):
+        for name, robot, data, limits, transmission, runs in datasets(Path(tmp), robots):
             recorded = data.recorded
             rate = 1.0 / float(np.median(np.diff(recorded.times)))
             rules = cutoffs(recorded.times, recorded.tau)
@@ -74,9 +77,9 @@ def main(argv=None) -> dict:
             for k, v in rules.items():
                 print(f"  {k:>11}: {np.array2string(v, precision=2)}  median {median[k]:.3g}")
             loaded = data.chain
-            chains = [loaded, sj.SignalChain(5.0, derive=True),
-                      sj.SignalChain(10.0, derive=True)]
-            chains += [sj.SignalChain(median[k], derive=True) for k in VALIDATED
+            chains = [loaded, SignalChain(5.0, derive=True),
+                      SignalChain(10.0, derive=True)]
+            chains += [SignalChain(median[k], derive=True) for k in VALIDATED
                        if 0 < median[k] < rate / 2]
             t0 = time.perf_counter()
             with warnings.catch_warnings():
@@ -88,14 +91,18 @@ def main(argv=None) -> dict:
             chosen = report.chain_selection
             scores = {label: float(cv.score) for label, cv in zip(chosen.labels,
                                                                   chosen.validations)}
+            held = {run: nrms(report.ident, judged_on(report, d), limits)
+                    for run, d in runs.items()}
             print(f"  the chains validated ({time.perf_counter() - t0:.0f} s), chosen: "
-                  f"{chosen.labels[chosen.chosen]}")
+                  f"{chosen.labels[chosen.chosen]}"
+                  + "".join(f"; {run}: {v:.4f} %" for run, v in held.items()))
             for label, score in scores.items():
                 print(f"    {label:<40} {score:.4f} %")
             out["robots"][name] = {"rate_hz": rate,
                                    "cutoffs_hz": {k: v.tolist() for k, v in rules.items()},
                                    "median_hz": median, "validated_percent": scores,
-                                   "chosen": chosen.labels[chosen.chosen]}
+                                   "chosen": chosen.labels[chosen.chosen],
+                                   "held_out_percent": held}
     if args.json is not None:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(to_json(out))

@@ -133,7 +133,7 @@ class Samples:
         those of the samples it leaves out."""
         whole = self.whole
         rows = None if whole is None else whole._kept.get(("rows", model.structure))
-        if whole is None or rows is None or self.small:
+        if whole is None or rows is None or self.mask is None or self.small:
             return self.kept("normal", model.structure,
                              lambda: NormalEquations.of(self.rows(model), self.tau))
         out = ~self.mask

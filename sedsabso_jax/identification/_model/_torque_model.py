@@ -294,7 +294,7 @@ class TorqueModel(eqx.Module):
         s = Signals(q, qd, qdd, recording, coulomb, None, probe, steps)
         if base_rows is None:
             return s
-        rigid = np.take(base_rows, self.rigid_columns, axis=-1)  # faster than indexing
+        rigid: Any = np.take(base_rows, self.rigid_columns, axis=-1)  # faster than indexing
         bodies = [term.columns(self, s) for term in self.terms if term.body]
         if bodies:
             rigid = jnp.concatenate([rigid, *bodies], -1)
