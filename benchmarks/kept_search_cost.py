@@ -19,7 +19,7 @@ import jax
 import numpy as np
 
 import sedsabso_jax as sj
-from benchmarks.output import to_json
+from benchmarks.output import write_json
 from sedsabso_jax.identification import KeptTerms, Projection, candidate_models
 
 TRIALS = 98
@@ -68,10 +68,7 @@ def main(argv=None) -> dict:
               f"{1e3 * r['seconds_per_trial']:.2f} ms a trial; the search on all the data "
               f"{r['evaluations']} trials, {r['newton_steps']} Newton steps, "
               f"{r['search_seconds']:.2f} s (identify {r['identify_seconds']:.2f} s)")
-    if args.json is not None:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(to_json(out))
-        print(f"written: {args.json}")
+    write_json(args.json, out)
     return out
 
 

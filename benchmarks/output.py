@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -35,3 +36,12 @@ def jsonable(value):
 def to_json(value) -> str:
     """Indented JSON text of :func:`jsonable` ``(value)``, with a final newline."""
     return json.dumps(jsonable(value), indent=2) + "\n"
+
+
+def write_json(path: Path | None, value) -> None:
+    """:func:`to_json` ``(value)`` written to ``path`` (its folder made; None: nothing),
+    and a line saying so."""
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(to_json(value))
+        print(f"written: {path}")

@@ -32,7 +32,7 @@ import numpy as np
 from scipy import signal
 
 import sedsabso_jax as sj
-from benchmarks.output import to_json
+from benchmarks.output import write_json
 from benchmarks.real_robots import ROBOTS, datasets, judged_on, nrms
 from sedsabso_jax.identification import candidate_models
 from sedsabso_jax.measurements import SignalChain
@@ -103,10 +103,7 @@ def main(argv=None) -> dict:
                                    "median_hz": median, "validated_percent": scores,
                                    "chosen": chosen.labels[chosen.chosen],
                                    "held_out_percent": held}
-    if args.json is not None:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(to_json(out))
-        print(f"written: {args.json}")
+    write_json(args.json, out)
     return out
 
 

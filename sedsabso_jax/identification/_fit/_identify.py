@@ -39,7 +39,7 @@ from .._estimators._least_squares import OLS
 from .._metrics import nrms_over_limits
 from .._model._checks import model_of, regrouped_message
 from .._model._torque_model import TorqueModel
-from .._recordings import Data
+from .._recordings import Data, recordings_of
 from ._fit import fit as fit_model
 from ._samples import Samples, recorded
 from ._uncertainty import parameter_std, relative_std_percent, searched_std
@@ -231,11 +231,13 @@ def identified(robot: Robot, data: Data, estimator: Estimator, model: TorqueMode
     model = model_of(robot, model)
     limits = per_joint("limits", limits, robot.n_joints)
     estimator.check(model, limits)  # what can be checked before any data are read
-    recordings, found = recorded(robot, data)
-    samples = found if samples is None else samples
-    if samples.tau.shape != found.tau.shape:
-        raise ValueError(f"samples of {samples.tau.shape[0]} samples given for data of "
-                         f"{found.tau.shape[0]}")
+    if samples is None:
+        recordings, samples = recorded(robot, data)
+    else:  # the recordings checked, not stacked again
+        recordings = recordings_of(robot, data)
+        if samples.tau.shape[0] != sum(r.n_samples for r in recordings):
+            raise ValueError(f"samples of {samples.tau.shape[0]} samples given for data of "
+                             f"{sum(r.n_samples for r in recordings)}")
     model.check_recordings(len(recordings))
     if check:
         check_fit_data(robot, recordings, model.dim, model.base, limits,
