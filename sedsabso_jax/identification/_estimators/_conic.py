@@ -2,7 +2,7 @@
 and their reports alike:
 
 - :func:`least_squares`: least squares over parameters bodies can have, built for
-  Clarabel directly (the fits of :mod:`._physical`, about 240 in one default
+  Clarabel directly (the fits of :mod:`._physical`, hundreds in one default
   identification);
 - :func:`solve`: a cvxpy problem (the payload's
   :func:`~.._payload._least_squares.consistent` and the drive gains'
@@ -110,6 +110,7 @@ def least_squares(M: Float[ArrayLike, "m n"], c: Float[ArrayLike, " m"],
     return np.array(solution.x[:n], dtype=float), {**report, "attempts": attempts}
 
 
+
 def _clarabel(problem: tuple, regularization: float | None, what: str) -> Any:
     """Clarabel's solution of ``problem`` (its ``P, q, A, b, cones``), quietly, with
     ``regularization`` as its static regularisation (None: its default)."""
@@ -121,7 +122,7 @@ def _clarabel(problem: tuple, regularization: float | None, what: str) -> Any:
         settings.static_regularization_constant = regularization
     try:
         return clarabel.DefaultSolver(*problem, settings).solve()
-    except Exception as err:  # Clarabel's errors (bad data and the like) share no class
+    except Exception as err:  # Clarabel's errors (bad data, a panic) share no class
         raise RuntimeError(f"{what}: the conic solver failed: {err}") from None
 
 
