@@ -221,37 +221,6 @@ def test_the_conic_least_squares_is_cvxpys(rng):
     assert np.linalg.eigvalsh(pseudo_inertia(truth[:10])).min() < 0  # the constraints bind
 
 
-def test_a_stalled_conic_fit_is_solved_again(rs010n, rng, monkeypatch):
-    """Where Clarabel stalls short of its tolerances, the fit is solved once more with
-    less regularisation, and that solution taken where it ends solved: no warning."""
-    import types
-    import warnings
-
-    import clarabel
-
-    from sedsabso_jax.identification._estimators._conic import RETRY_REGULARIZATION
-
-    robot, base = rs010n
-    q, qd, qdd = states(rng, 3)
-    tau = np.asarray(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
-    solver, regularizations = clarabel.DefaultSolver, []
-
-    def stalling_first(P, q_, A, b, cones, settings):
-        regularizations.append(settings.static_regularization_constant)
-        out = solver(P, q_, A, b, cones, settings).solve()
-        status = "AlmostSolved" if len(regularizations) == 1 else out.status
-        return types.SimpleNamespace(solve=lambda: types.SimpleNamespace(
-            x=out.x, iterations=out.iterations, status=status))
-
-    monkeypatch.setattr(clarabel, "DefaultSolver", stalling_first)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        ident = identify(robot, (q, qd, qdd, tau), PhysicallyConsistent(), model_of(robot, base))
-    report = ident.settings["physical_fit"]
-    assert report["status"] == "optimal" and report["attempts"] == 2
-    assert regularizations[1] == RETRY_REGULARIZATION != regularizations[0]
-
-
 def test_physical_fit_never_fails_silently(rs010n, rng, monkeypatch):
     """Clarabel's status is checked: an inaccurate solve warns, a failed one (or a solver
     error) raises with the status, instead of returning whatever the solver left; the

@@ -643,10 +643,6 @@ BUGS = [
      "        if last is None or last[0] != model.structure:",
      "        if last is None:", "a split predicting with the rows of the model it read last",
      VALIDATIONS, None),
-    ("identification/_estimators/_conic.py",
-     "    if str(solution.status) in STALLED:  # kept unless the second attempt ends solved",
-     "    if False:", "a stalled conic fit not solved again (a warning where a second "
-     "attempt ends solved)", ["tests/test_identification.py"], None),
 ]
 
 

@@ -26,13 +26,6 @@ from ...dynamics._inertia import pseudo_inertia
 NOT_SOLVED = "none (the least-squares solution is consistent)"
 #: Smallest eigenvalue of each body's pseudo-inertia in a consistent fit (kg m^2, kg).
 PSD_MARGIN = 1e-6
-#: Clarabel's regularisation of its linear systems in a second attempt, where the first
-#: (Clarabel's defaults) stalls short of its tolerances: a path that stalls with one
-#: regularisation ends with another (1 of the 278 fits of the Panda's default
-#: identification stalled with either, not the same one; each ends with the other).
-RETRY_REGULARIZATION = 1e-10
-#: Clarabel's endings that a second attempt may improve on (not an infeasible problem).
-STALLED = ("AlmostSolved", "InsufficientProgress", "MaxIterations", "NumericalError")
 
 
 def _svec_rows() -> tuple[np.ndarray, np.ndarray]:
@@ -63,8 +56,7 @@ def least_squares(M: Float[ArrayLike, "m n"], c: Float[ArrayLike, " m"],
     the solver's tolerance applies to the residual's norm, not to its square: a fit to
     exact data is exact), in units of ``||c||``; a body's constraint as Clarabel's
     positive semidefinite cone of its pseudo-inertia. Built anew each call (no
-    canonicalisation: ``python -m benchmarks.physical_fit``); solved again with
-    :data:`RETRY_REGULARIZATION` where Clarabel stalls (:data:`STALLED`).
+    canonicalisation: ``python -m benchmarks.physical_fit``).
 
     Arguments:
         M, c: the data term (a factor of the normal equations and its right-hand side).
@@ -73,8 +65,7 @@ def least_squares(M: Float[ArrayLike, "m n"], c: Float[ArrayLike, " m"],
         nonneg: the parameters that are ``>= 0``.
         what, none_found, started: as :func:`solve`'s.
 
-    Returns ``(x, report)``, the report as :func:`solve`'s and its ``attempts`` (1 or
-    2)."""
+    Returns ``(x, report)``, the report as :func:`solve`'s."""
     import clarabel
 
     t0 = time.perf_counter() if started is None else started
@@ -98,32 +89,17 @@ def least_squares(M: Float[ArrayLike, "m n"], c: Float[ArrayLike, " m"],
                         np.tile(-PSD_MARGIN * e, len(bodies)), np.zeros(len(nonneg))])
     cones = [clarabel.SecondOrderConeT(k), *[clarabel.PSDTriangleConeT(4) for _ in bodies]]
     cones += [clarabel.NonnegativeConeT(len(nonneg))] if nonneg else []
-    problem = (sp.csc_matrix((n + 1, n + 1)), np.r_[np.zeros(n), 1.0], sp.csc_matrix(A), b,
-               cones)
-    solution, attempts = _clarabel(problem, None, what), 1
-    if str(solution.status) in STALLED:  # kept unless the second attempt ends solved
-        attempts, retried = 2, _clarabel(problem, RETRY_REGULARIZATION, what)
-        solution = retried if str(retried.status) == "Solved" else solution
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    try:
+        solution = clarabel.DefaultSolver(sp.csc_matrix((n + 1, n + 1)), np.r_[np.zeros(n), 1.0],
+                                          sp.csc_matrix(A), b, cones, settings).solve()
+    except Exception as err:  # Clarabel's errors (bad data, a panic) have no common class
+        raise RuntimeError(f"{what}: the conic solver failed: {err}") from None
     status = {"Solved": "optimal", "AlmostSolved": "optimal_inaccurate"}.get(
         str(solution.status), str(solution.status))
     report = _checked(status, int(solution.iterations), "Clarabel", what, none_found, t0)
-    return np.array(solution.x[:n], dtype=float), {**report, "attempts": attempts}
-
-
-
-def _clarabel(problem: tuple, regularization: float | None, what: str) -> Any:
-    """Clarabel's solution of ``problem`` (its ``P, q, A, b, cones``), quietly, with
-    ``regularization`` as its static regularisation (None: its default)."""
-    import clarabel
-
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    if regularization is not None:
-        settings.static_regularization_constant = regularization
-    try:
-        return clarabel.DefaultSolver(*problem, settings).solve()
-    except Exception as err:  # Clarabel's errors (bad data, a panic) share no class
-        raise RuntimeError(f"{what}: the conic solver failed: {err}") from None
+    return np.array(solution.x[:n], dtype=float), report
 
 
 def solve(problem: Any, what: str, none_found: str, *, started: float | None = None) -> dict:
