@@ -5,7 +5,7 @@ identification's estimators of normal equations (interface: :mod:`._estimator`).
 - :class:`WLS`: the same on rows divided by each joint's sigma, by default Gautier's
   two-step estimate from an OLS pass's residuals;
 - :class:`PhysicallyConsistent`: least squares over full link parameters a real body can
-  have (:mod:`._physical`, solved by Clarabel), optionally pulled toward a prior.
+  have (:mod:`._physical`; Clarabel through cvxpy), optionally pulled toward a prior.
 
 Each is built with its options, converted and checked there::
 

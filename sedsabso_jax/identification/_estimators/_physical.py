@@ -17,9 +17,9 @@ that is a body (a payload: its own pseudo-inertia positive semidefinite)::
 
 with ``W, b`` the (weighted) stacked regressor and torques, ``K`` the map from full to base
 parameters and ``p`` the full parameters (12 per link). It is a convex semidefinite
-programme, solved to its global optimum by Clarabel (:func:`~._conic.least_squares`; the
-data enter only through the ``d x d`` triangular factor of
-:func:`~sedsabso_jax.optim._linear.factorize`).
+programme, solved to its global optimum by Clarabel through cvxpy (the data enter only
+through the ``d x d`` triangular factor of :func:`~sedsabso_jax.optim._linear.factorize`;
+the programme is built once per model shape, with the data as parameters).
 ``lambda`` is the user's ``prior_weight`` plus ``prior_strength`` times the data term's
 mean curvature (the scale-free form, chosen by validation in
 :func:`~sedsabso_jax.choose_prior_strength`), but at least :data:`RIDGE` times that
@@ -31,6 +31,7 @@ solution finite. A solve that is not optimal is an error; an inaccurate one a wa
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 
 import numpy as np
@@ -40,8 +41,10 @@ from ...dynamics._inertia import pseudo_inertia
 from ...dynamics._robot import N_LINK_PARAMETERS
 from ...optim._linear import Factorization
 from .._model._torque_model import TorqueModel
-from ._conic import NOT_SOLVED, PSD_MARGIN, least_squares
+from ._conic import NOT_SOLVED, solve
 
+#: Smallest eigenvalue of each link's pseudo-inertia in a physical fit (kg m^2, kg).
+PSD_MARGIN = 1e-6
 #: Smallest pull to the prior, relative to the mean curvature of the data term.
 RIDGE = 1e-9
 #: How the fit's errors name it, and what a failed solve did not find.
@@ -52,11 +55,63 @@ WHAT, NONE_FOUND = "physically consistent fit", "no consistent parameters were f
 class PhysicalFit:
     """What :func:`fit_physical` returns: the model's values (base parameters, then the
     extras), the full parameters (12 per link, or None) and the solver's report
-    (:func:`~._conic.least_squares`)."""
+    (:func:`~._conic.solve`)."""
 
     values: np.ndarray
     full_params: np.ndarray | None
     report: dict
+
+
+def inertial_params(J):
+    """A link's 10 parameters ``[Ixx Iyy Izz Ixy Ixz Iyz m mx my mz]`` as affine cvxpy
+    expressions of its pseudo-inertia ``J`` (the inverse of ``pseudo_inertia``:
+    ``I = tr(S) 1 - S`` with ``S`` the upper-left 3x3 block)."""
+    return [J[1, 1] + J[2, 2], J[0, 0] + J[2, 2], J[0, 0] + J[1, 1],
+            -J[0, 1], -J[0, 2], -J[1, 2], J[3, 3], J[0, 3], J[1, 3], J[2, 3]]
+
+
+@functools.lru_cache(maxsize=32)
+def _programme(n_joints: int, dim: int, n_extra: int, nonneg: tuple[int, ...],
+               bodies: tuple[int, ...] = ()):
+    """The semidefinite programme of :func:`fit_physical` for one shape of model, with the
+    data, the prior and its weight as cvxpy parameters (a DPP problem): cvxpy then
+    canonicalises it once, and later solves only put in new numbers. The cached
+    problem's parameters are shared:
+    fits of one model shape from several threads at once would race (one process, one
+    fit at a time, as every caller here does).
+    Returns ``(problem, parameters dict, full parameters p, extras or None)``."""
+    import cvxpy as cp
+
+    d_full = N_LINK_PARAMETERS * n_joints
+    M = cp.Parameter((dim, d_full + n_extra), name="M")
+    c = cp.Parameter(dim, name="c")
+    root_lam = cp.Parameter(nonneg=True, name="root_lambda")
+    pulled = cp.Parameter(d_full, name="root_lambda_prior")  # sqrt(lambda) p_prior
+    J = [cp.Variable((4, 4), symmetric=True, name=f"J{i + 1}") for i in range(n_joints)]
+    friction = cp.Variable(2 * n_joints, name="friction")  # (Fc_i, Fv_i) per joint
+    extras = cp.Variable(n_extra, name="extras") if n_extra else None
+    p = cp.hstack([e for i in range(n_joints)
+                   for e in (*inertial_params(J[i]), friction[2 * i], friction[2 * i + 1])])
+    pe = cp.hstack([p, extras]) if extras is not None else p
+    # the square root of the objective (same minimiser) as one second-order cone: the
+    # solver's tolerance then applies to the residual norm, not to its square
+    objective = cp.norm(cp.hstack([M @ pe - c, root_lam * p - pulled]), 2)
+    constraints = [Ji - PSD_MARGIN * np.eye(4) >> 0 for Ji in J] + [friction >= 0]
+    if nonneg and extras is not None:  # friction and armature extras
+        constraints.append(extras[list(nonneg)] >= 0)
+    for k, start in enumerate(bodies):  # extras that are a body's 10 inertial parameters
+        assert extras is not None  # a body is extra columns
+        B = cp.Variable((4, 4), symmetric=True, name=f"body{k + 1}")
+        constraints += [B - PSD_MARGIN * np.eye(4) >> 0,
+                        extras[start:start + 10] == cp.hstack(inertial_params(B))]
+    problem = cp.Problem(cp.Minimize(objective), constraints)
+    parameters = {"M": M, "c": c, "root_lam": root_lam, "pulled": pulled}
+    for v in parameters.values():
+        v.value = np.ones(v.shape) if v is root_lam else np.zeros(v.shape)
+    # canonicalise now, by a solve of a trivial instance (min ||p||): every later solve
+    # then takes the same path and gives the same numbers for the same data
+    problem.solve(solver=cp.CLARABEL)
+    return problem, parameters, p, extras
 
 
 def fit_physical(model: TorqueModel, factor: Factorization, prior: Float[ArrayLike, " p"],
@@ -77,29 +132,50 @@ def fit_physical(model: TorqueModel, factor: Factorization, prior: Float[ArrayLi
     C[: K.shape[0], :d_full] = K
     C[K.shape[0]:, d_full:] = np.eye(n_extra)
     M = factor.R @ C[factor.perm]  # data term: ||M [p; e] - c||^2 + const
+    scale = max(float(np.linalg.norm(factor.c)), 1e-300)  # the objective in units of ||c||^2
     curvature = float(np.sum(M ** 2)) / (d_full + n_extra)
     lam = max(float(prior_weight) + float(prior_strength) * curvature, RIDGE * curvature)
-    links = N_LINK_PARAMETERS * np.arange(n)
-    bodies, nonneg = _extras(model, d_full)
-    t0 = time.perf_counter()
-    x, report = least_squares(
-        M, factor.c, np.concatenate([np.full(d_full, lam), np.zeros(n_extra)]),
-        np.concatenate([np.asarray(prior, dtype=float), np.zeros(n_extra)]),
-        bodies=tuple(int(k) for k in links) + bodies,
-        nonneg=tuple(int(k) for k in np.sort(np.r_[links + 10, links + 11])) + nonneg,
-        what=WHAT, none_found=NONE_FOUND, started=t0)
-    full = x[:d_full]
-    return PhysicalFit(np.concatenate([K @ full, x[d_full:]]), full, report)
-
-
-def _extras(model: TorqueModel, start: int) -> tuple[tuple[int, ...], tuple[int, ...]]:
-    """Where the model's extra columns (after the base's) that are bodies begin and
-    which are ``>= 0``, as indices of parameters whose extras begin at ``start``."""
+    nonneg = tuple(int(k) for k in np.flatnonzero(model.nonnegative[model.base.rank:]))
     body = np.flatnonzero(model.bodies[model.base.rank:])
     if body.size % 10 or np.any(body[::10] + 9 != body[9::10]):
         raise ValueError("a body's columns must be 10 in a row (a term's every column)")
-    nonneg = np.flatnonzero(model.nonnegative[model.base.rank:])
-    return tuple(int(k) for k in start + body[::10]), tuple(int(k) for k in start + nonneg)
+    t0 = time.perf_counter()
+    problem, values, p, extras = _programme(n, model.dim, n_extra, nonneg,
+                                            tuple(int(k) for k in body[::10]))
+    values["M"].value = M / scale
+    values["c"].value = factor.c / scale
+    values["root_lam"].value = np.sqrt(lam) / scale
+    values["pulled"].value = np.sqrt(lam) / scale * np.asarray(prior, dtype=float)
+    report = solve(problem, WHAT, NONE_FOUND, started=t0)
+    full = np.asarray(p.value, dtype=float)
+    extra_values = np.asarray(extras.value, dtype=float) if extras is not None else np.zeros(0)
+    return PhysicalFit(np.concatenate([K @ full, extra_values]), full, report)
+
+
+@functools.lru_cache(maxsize=32)
+def _bodies_programme(dim: int, rank: int, nonneg: tuple[int, ...], bodies: tuple[int, ...]):
+    """The least squares of :func:`fit_bodies` for one shape of model, its data as cvxpy
+    parameters (built and canonicalised once, as :func:`_programme`)."""
+    import cvxpy as cp
+
+    M = cp.Parameter((dim, dim), name="M")
+    c = cp.Parameter(dim, name="c")
+    root_ridge = cp.Parameter(nonneg=True, name="root_ridge")
+    pulled = cp.Parameter(dim, name="root_ridge_start")
+    x = cp.Variable(dim, name="x")
+    extras = x[rank:]
+    constraints = [extras[list(nonneg)] >= 0] if nonneg else []
+    for k, start in enumerate(bodies):
+        B = cp.Variable((4, 4), symmetric=True, name=f"body{k + 1}")
+        constraints += [B - PSD_MARGIN * np.eye(4) >> 0,
+                        extras[start:start + 10] == cp.hstack(inertial_params(B))]
+    problem = cp.Problem(cp.Minimize(cp.norm(cp.hstack([M @ x - c, root_ridge * x - pulled]),
+                                             2)), constraints)
+    parameters = {"M": M, "c": c, "root_ridge": root_ridge, "pulled": pulled}
+    for v in parameters.values():
+        v.value = np.ones(v.shape) if v is root_ridge else np.zeros(v.shape)
+    problem.solve(solver=cp.CLARABEL)
+    return problem, parameters, x
 
 
 def fit_bodies(model: TorqueModel, factor: Factorization) -> PhysicalFit:
@@ -113,15 +189,23 @@ def fit_bodies(model: TorqueModel, factor: Factorization) -> PhysicalFit:
     parameters)."""
     rank = model.base.rank
     M = factor.R @ np.eye(model.dim)[factor.perm]
-    bodies, nonneg = _extras(model, rank)
+    scale = max(float(np.linalg.norm(factor.c)), 1e-300)
+    ridge = RIDGE * float(np.sum(M ** 2)) / model.dim
+    nonneg = tuple(int(k) for k in np.flatnonzero(model.nonnegative[rank:]))
+    body = np.flatnonzero(model.bodies[rank:])
     t0 = time.perf_counter()
     free = factor.solve()
-    if np.all(free[list(nonneg)] >= 0) and all(
-            np.linalg.eigvalsh(pseudo_inertia(free[k:k + 10])).min() >= PSD_MARGIN
-            for k in bodies):
+    extras = free[rank:]
+    if np.all(extras[list(nonneg)] >= 0) and all(
+            np.linalg.eigvalsh(pseudo_inertia(extras[k:k + 10])).min() >= PSD_MARGIN
+            for k in body[::10]):
         return PhysicalFit(free, None, {"solver": NOT_SOLVED, "status": "optimal",
                                         "iterations": 0, "seconds": time.perf_counter() - t0})
-    ridge = RIDGE * float(np.sum(M ** 2)) / model.dim
-    x, report = least_squares(M, factor.c, np.full(model.dim, ridge), free, bodies=bodies,
-                              nonneg=nonneg, what=WHAT, none_found=NONE_FOUND, started=t0)
-    return PhysicalFit(x, None, report)
+    problem, values, x = _bodies_programme(model.dim, rank, nonneg,
+                                           tuple(int(k) for k in body[::10]))
+    values["M"].value = M / scale
+    values["c"].value = factor.c / scale
+    values["root_ridge"].value = np.sqrt(ridge) / scale
+    values["pulled"].value = np.sqrt(ridge) / scale * free
+    report = solve(problem, WHAT, NONE_FOUND, started=t0)
+    return PhysicalFit(np.asarray(x.value, dtype=float), None, report)

@@ -41,6 +41,7 @@ from ...dynamics._inertia import pseudo_inertia
 from ...dynamics._regressor import inverse_dynamics
 from ...dynamics._robot import Robot
 from ...measurements._container import Measurements
+from .._estimators._physical import inertial_params
 from ._rollouts import ModelTorque, simulated_dynamics, starts
 
 #: The position error the cost counts as one unit (rad): 1 degree.
@@ -98,12 +99,10 @@ def _inertial(theta: Array) -> Array:
     L = jnp.zeros(theta.shape[:-1] + (4, 4))
     L = L.at[..., np.arange(4), np.arange(4)].set(jnp.exp(theta[..., :4]))
     L = L.at[..., rows, cols].set(theta[..., 4:])
-    J = L @ jnp.swapaxes(L, -1, -2)
-    # the inverse of pseudo_inertia: I = tr(S) 1 - S, S the upper-left 3x3 block
-    p = [J[..., 1, 1] + J[..., 2, 2], J[..., 0, 0] + J[..., 2, 2], J[..., 0, 0] + J[..., 1, 1],
-         -J[..., 0, 1], -J[..., 0, 2], -J[..., 1, 2], J[..., 3, 3], J[..., 0, 3], J[..., 1, 3],
-         J[..., 2, 3]]
-    return jnp.stack(p, -1)
+    J = (L @ jnp.swapaxes(L, -1, -2)).reshape(-1, 4, 4)
+    # the physical fit's map from a pseudo-inertia to the 10 parameters, one per link
+    p = jax.vmap(lambda Jk: jnp.stack(inertial_params(Jk)))(J)
+    return p.reshape(theta.shape[:-1] + (10,))
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
