@@ -192,15 +192,14 @@ BUGS = [
     ("identification/_model/_offset.py", "share = jnp.full(batch + (R,), 1.0 / R)",
      "share = jnp.full(batch + (R,), 1.0)", "new motions get the sum of the recordings' "
      "offsets, not their mean", VALIDATIONS, None),
+    ("identification/_estimators/_programme.py",
+     "np.zeros(self.dim), 1.0,", "np.zeros(self.dim), 2.0,",
+     "the conic solver set up on another instance than cvxpy's first solve (another "
+     "equilibration: not cvxpy's numbers)", ["tests/test_physical_programme.py"], None),
     ("identification/_estimators/_physical.py",
-     "    problem.solve(solver=cp.CLARABEL)\n    return problem, parameters, p, extras",
-     "    return problem, parameters, p, extras",
-     "the conic programme's first solve takes another path (not repeatable)", VALIDATIONS,
-     None),
-    ("identification/_estimators/_physical.py",
-     "        constraints.append(extras[list(nonneg)] >= 0)",
-     "        pass", "quadratic friction may turn negative in a physical fit", VALIDATIONS,
-     None),
+     "    shape = programme(n, model.dim, n_extra, nonneg,",
+     "    shape = programme(n, model.dim, n_extra, (),",
+     "quadratic friction may turn negative in a physical fit", VALIDATIONS, None),
     ("identification/_default/_policy.py", "not physical[i], i))",
      "physical[i], i))", "the rule prefers the unconstrained fit at equal "
      "parameters", VALIDATIONS, None),
@@ -323,12 +322,9 @@ BUGS = [
      "            on = np.isin(np.asarray(s.recording), np.asarray(self.carried, dtype=int))",
      "            on = ~np.isin(np.asarray(s.recording), np.asarray(self.carried, dtype=int))",
      "the payload on the unloaded recordings", PAYLOAD, None),
-    ("identification/_estimators/_physical.py",
-     "        constraints += [B - PSD_MARGIN * np.eye(4) >> 0,\n"
-     "                        extras[start:start + 10] == cp.hstack(inertial_params(B))]\n"
-     "    problem = cp.Problem(cp.Minimize(objective), constraints)",
-     "        constraints += [B - PSD_MARGIN * np.eye(4) >> 0]\n"
-     "    problem = cp.Problem(cp.Minimize(objective), constraints)",
+    ("identification/_estimators/_programme.py",
+     "            np.ones(10 * nb), np.tile(-link[np.nonzero(link)], nb),",
+     "            np.zeros(10 * nb), np.tile(-link[np.nonzero(link)], nb),",
      "a body term's parameters not tied to its pseudo-inertia (links constrained)",
      PAYLOAD, None),
     ("identification/_estimators/_physical.py",
@@ -572,7 +568,7 @@ BUGS = [
      "            if True:\n                continue\n", "the bodies merged into an "
      "identified link keep their own inertia in the user's MJCF",
      ["tests/test_mjcf_update.py"], None),
-    ("identification/_estimators/_physical.py",
+    ("identification/_estimators/_programme.py",
      "return [J[1, 1] + J[2, 2], J[0, 0] + J[2, 2],",
      "return [J[1, 1] + J[2, 2], J[0, 0] + J[1, 1],",
      "Iyy from the wrong diagonal of a pseudo-inertia (the physical fit's and the "

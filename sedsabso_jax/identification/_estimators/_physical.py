@@ -17,9 +17,9 @@ that is a body (a payload: its own pseudo-inertia positive semidefinite)::
 
 with ``W, b`` the (weighted) stacked regressor and torques, ``K`` the map from full to base
 parameters and ``p`` the full parameters (12 per link). It is a convex semidefinite
-programme, solved to its global optimum by Clarabel through cvxpy (the data enter only
-through the ``d x d`` triangular factor of :func:`~sedsabso_jax.optim._linear.factorize`;
-the programme is built once per model shape, with the data as parameters).
+programme, solved to its global optimum by Clarabel (the data enter only through the ``d
+x d`` triangular factor of :func:`~sedsabso_jax.optim._linear.factorize`; the programme is
+built once per model shape, as cvxpy would state it: :mod:`._programme`).
 ``lambda`` is the user's ``prior_weight`` plus ``prior_strength`` times the data term's
 mean curvature (the scale-free form, chosen by validation in
 :func:`~sedsabso_jax.choose_prior_strength`), but at least :data:`RIDGE` times that
@@ -41,10 +41,9 @@ from ...dynamics._inertia import pseudo_inertia
 from ...dynamics._robot import N_LINK_PARAMETERS
 from ...optim._linear import Factorization
 from .._model._torque_model import TorqueModel
-from ._conic import NOT_SOLVED, solve
+from ._conic import NOT_SOLVED, solve, solve_data
+from ._programme import PSD_MARGIN, inertial_params, programme
 
-#: Smallest eigenvalue of each link's pseudo-inertia in a physical fit (kg m^2, kg).
-PSD_MARGIN = 1e-6
 #: Smallest pull to the prior, relative to the mean curvature of the data term.
 RIDGE = 1e-9
 #: How the fit's errors name it, and what a failed solve did not find.
@@ -60,58 +59,6 @@ class PhysicalFit:
     values: np.ndarray
     full_params: np.ndarray | None
     report: dict
-
-
-def inertial_params(J):
-    """A link's 10 parameters ``[Ixx Iyy Izz Ixy Ixz Iyz m mx my mz]`` as affine cvxpy
-    expressions of its pseudo-inertia ``J`` (the inverse of ``pseudo_inertia``:
-    ``I = tr(S) 1 - S`` with ``S`` the upper-left 3x3 block)."""
-    return [J[1, 1] + J[2, 2], J[0, 0] + J[2, 2], J[0, 0] + J[1, 1],
-            -J[0, 1], -J[0, 2], -J[1, 2], J[3, 3], J[0, 3], J[1, 3], J[2, 3]]
-
-
-@functools.lru_cache(maxsize=32)
-def _programme(n_joints: int, dim: int, n_extra: int, nonneg: tuple[int, ...],
-               bodies: tuple[int, ...] = ()):
-    """The semidefinite programme of :func:`fit_physical` for one shape of model, with the
-    data, the prior and its weight as cvxpy parameters (a DPP problem): cvxpy then
-    canonicalises it once, and later solves only put in new numbers. The cached
-    problem's parameters are shared:
-    fits of one model shape from several threads at once would race (one process, one
-    fit at a time, as every caller here does).
-    Returns ``(problem, parameters dict, full parameters p, extras or None)``."""
-    import cvxpy as cp
-
-    d_full = N_LINK_PARAMETERS * n_joints
-    M = cp.Parameter((dim, d_full + n_extra), name="M")
-    c = cp.Parameter(dim, name="c")
-    root_lam = cp.Parameter(nonneg=True, name="root_lambda")
-    pulled = cp.Parameter(d_full, name="root_lambda_prior")  # sqrt(lambda) p_prior
-    J = [cp.Variable((4, 4), symmetric=True, name=f"J{i + 1}") for i in range(n_joints)]
-    friction = cp.Variable(2 * n_joints, name="friction")  # (Fc_i, Fv_i) per joint
-    extras = cp.Variable(n_extra, name="extras") if n_extra else None
-    p = cp.hstack([e for i in range(n_joints)
-                   for e in (*inertial_params(J[i]), friction[2 * i], friction[2 * i + 1])])
-    pe = cp.hstack([p, extras]) if extras is not None else p
-    # the square root of the objective (same minimiser) as one second-order cone: the
-    # solver's tolerance then applies to the residual norm, not to its square
-    objective = cp.norm(cp.hstack([M @ pe - c, root_lam * p - pulled]), 2)
-    constraints = [Ji - PSD_MARGIN * np.eye(4) >> 0 for Ji in J] + [friction >= 0]
-    if nonneg and extras is not None:  # friction and armature extras
-        constraints.append(extras[list(nonneg)] >= 0)
-    for k, start in enumerate(bodies):  # extras that are a body's 10 inertial parameters
-        assert extras is not None  # a body is extra columns
-        B = cp.Variable((4, 4), symmetric=True, name=f"body{k + 1}")
-        constraints += [B - PSD_MARGIN * np.eye(4) >> 0,
-                        extras[start:start + 10] == cp.hstack(inertial_params(B))]
-    problem = cp.Problem(cp.Minimize(objective), constraints)
-    parameters = {"M": M, "c": c, "root_lam": root_lam, "pulled": pulled}
-    for v in parameters.values():
-        v.value = np.ones(v.shape) if v is root_lam else np.zeros(v.shape)
-    # canonicalise now, by a solve of a trivial instance (min ||p||): every later solve
-    # then takes the same path and gives the same numbers for the same data
-    problem.solve(solver=cp.CLARABEL)
-    return problem, parameters, p, extras
 
 
 def fit_physical(model: TorqueModel, factor: Factorization, prior: Float[ArrayLike, " p"],
@@ -140,22 +87,19 @@ def fit_physical(model: TorqueModel, factor: Factorization, prior: Float[ArrayLi
     if body.size % 10 or np.any(body[::10] + 9 != body[9::10]):
         raise ValueError("a body's columns must be 10 in a row (a term's every column)")
     t0 = time.perf_counter()
-    problem, values, p, extras = _programme(n, model.dim, n_extra, nonneg,
-                                            tuple(int(k) for k in body[::10]))
-    values["M"].value = M / scale
-    values["c"].value = factor.c / scale
-    values["root_lam"].value = np.sqrt(lam) / scale
-    values["pulled"].value = np.sqrt(lam) / scale * np.asarray(prior, dtype=float)
-    report = solve(problem, WHAT, NONE_FOUND, started=t0)
-    full = np.asarray(p.value, dtype=float)
-    extra_values = np.asarray(extras.value, dtype=float) if extras is not None else np.zeros(0)
+    shape = programme(n, model.dim, n_extra, nonneg, tuple(int(k) for k in body[::10]))
+    data = shape.data(M / scale, factor.c / scale, np.sqrt(lam) / scale,
+                          np.sqrt(lam) / scale * np.asarray(prior, dtype=float))
+    x, report = solve_data(shape.solver, data, WHAT, NONE_FOUND, started=t0)
+    full, extra_values = shape.parameters(x)
     return PhysicalFit(np.concatenate([K @ full, extra_values]), full, report)
 
 
 @functools.lru_cache(maxsize=32)
 def _bodies_programme(dim: int, rank: int, nonneg: tuple[int, ...], bodies: tuple[int, ...]):
     """The least squares of :func:`fit_bodies` for one shape of model, its data as cvxpy
-    parameters (built and canonicalised once, as :func:`_programme`)."""
+    parameters: canonicalised once, by a first solve of the trivial instance (whose
+    equilibration every later solve keeps, as :class:`~._programme.Programme`'s)."""
     import cvxpy as cp
 
     M = cp.Parameter((dim, dim), name="M")

@@ -41,7 +41,7 @@ from ...dynamics._inertia import pseudo_inertia
 from ...dynamics._regressor import inverse_dynamics
 from ...dynamics._robot import Robot
 from ...measurements._container import Measurements
-from .._estimators._physical import inertial_params
+from .._estimators._programme import inertial_params
 from ._rollouts import ModelTorque, simulated_dynamics, starts
 
 #: The position error the cost counts as one unit (rad): 1 degree.
