@@ -277,3 +277,26 @@ def test_physical_friction_stays_physical_beyond_the_fitted_speeds():
     v = dict(zip(physical.names, physical.values))
     assert min(v[f"{k}{j}"] for k in ("FC", "FV", "FQ") for j in (1, 2, 3)) >= 0
     assert np.all(friction_torque(physical, 10 * peak) > 0)
+
+
+def test_splits_fitted_at_once_give_the_numbers_fitted_in_turn(monkeypatch):
+    """A validation's splits are fitted on several threads at once: each split's fit
+    (a searched Coulomb shape, the physically consistent conic fit) and its scores are
+    those of the splits fitted one after another, in the splits' order, to the bit."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from sedsabso_jax.identification._validation import _cross_validation
+
+    data = _run(11, noise=0.1, friction=lambda qd: 2.0 * np.tanh(qd / 0.05))
+    robot = sj.robots.rs010n()
+    model = sj.TorqueModel.of(robot, (sj.SmoothCoulomb(fitted=True), sj.Offset()))
+    estimator = sj.PhysicallyConsistent(sj.WLS("residual"))
+    validations = {}
+    for workers in (1, 4):
+        monkeypatch.setattr(_cross_validation, "_POOL", ThreadPoolExecutor(workers))
+        validations[workers] = sj.cross_validate(robot, data, estimator, model,
+                                                 validation=sj.PhaseFolds(6))
+    in_turn, at_once = validations[1], validations[4]
+    assert np.asarray(in_turn.fold_scores).tobytes() == np.asarray(at_once.fold_scores).tobytes()
+    assert in_turn.residuals.tobytes() == at_once.residuals.tobytes()
+    np.testing.assert_array_equal(in_turn.tested, at_once.tested)

@@ -241,14 +241,14 @@ def choose_chain(robot: Robot, recordings: list[Measurements],
         """``chain`` validated on its ``recs`` (``samples``); ``delayed``: with the delay
         searched on each split's training samples (none where none has the neighbours
         to shift by), ``chain`` its delay on all the samples."""
-        found: list[float] = []
+        found: dict[bytes, float] = {}  # by split (the splits are fitted at once)
 
         def made_for(train: np.ndarray) -> Samples:
             try:
                 seconds = delay_of(samples, model, rate, m, limits, train).seconds
             except ValueError:
                 seconds = 0.0
-            found.append(seconds)
+            found[train.tobytes()] = seconds
             return recorded(robot, made_by(eqx.tree_at(lambda c: c.delay_s, chain,
                                                          seconds)))[1]
 
@@ -259,7 +259,8 @@ def choose_chain(robot: Robot, recordings: list[Measurements],
         cv = cross_validation_of(estimator, model, samples, splits, limits, settings,
                                  on_fit=fits.after(f"signals: {label}", each),
                                  made=made_for if delayed else None)
-        tried.append((chain, recs, cv, tuple(found)))
+        tried.append((chain, recs, cv, tuple(found[t.tobytes()] for t in splits.train
+                                             if t.tobytes() in found)))
 
     loaded = recorded(robot, first)[1]
     validate(chains[0], first, loaded)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import threading
 
 import numpy as np
 import scipy.sparse as sp
@@ -197,10 +198,15 @@ class Programme:
         return pe[:d_full], pe[d_full:]
 
 
-@functools.lru_cache(maxsize=32)
 def programme(n_joints: int, dim: int, n_extra: int, nonneg: tuple[int, ...],
-               bodies: tuple[int, ...] = ()) -> Programme:
-    """The :class:`Programme` of one model shape, built and set up once. The cached
-    solver is shared: fits of one model shape from several threads at once would race
-    (one process, one fit at a time, as every caller here does)."""
+              bodies: tuple[int, ...] = ()) -> Programme:
+    """The :class:`Programme` of one model shape, built and set up once per thread (a
+    solver takes one fit at a time; every thread's is set up alike, so gives the same
+    numbers)."""
+    return _programme(threading.get_ident(), n_joints, dim, n_extra, nonneg, bodies)
+
+
+@functools.lru_cache(maxsize=64)
+def _programme(thread: int, n_joints: int, dim: int, n_extra: int, nonneg: tuple[int, ...],
+               bodies: tuple[int, ...]) -> Programme:
     return Programme(n_joints, dim, n_extra, nonneg, bodies)

@@ -8,7 +8,10 @@ splits, :mod:`._selection` has the public functions built on this."""
 from __future__ import annotations
 
 import dataclasses
+import os
+import threading
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -26,6 +29,11 @@ from ._splits import Splits
 TIE_FRACTION = DEFAULT.tie_fraction
 #: The one-standard-error rule's test (:meth:`~.._default._policy.Default.not_worse`).
 not_worse = DEFAULT.not_worse
+#: The threads that fit a validation's splits at once, one per core the process may use.
+_THREADS = "sedsabso-jax-split"
+_POOL = ThreadPoolExecutor(
+    max_workers=len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+    else os.cpu_count() or 1, thread_name_prefix=_THREADS)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -115,22 +123,32 @@ def cross_validation_of(estimator: Estimator, model: TorqueModel, samples: Sampl
     of the validation that made the splits; ``on_fit()`` after each fit; ``made(train)``:
     the samples of a split instead, made knowing only its training mask (a delay
     searched on them)."""
-    measured, predicted, scores, tested = [], [], [], []
     every = np.arange(samples.q.shape[0])
+
+    def one(train: np.ndarray, test: np.ndarray) -> tuple:
+        these = samples if made is None else made(train)
+        fitted = fit_model(estimator, model, these.split(train), limits, warn=False)
+        measured = these.tau[test]
+        predicted = these.split(test).predict(fitted.model, fitted.fit.x)
+        return (measured, predicted, every[test],
+                score_of(validation_metrics(measured, predicted, limits)))
+
     # many small factorisations: one BLAS thread each (docs/explanation/
-    # identification-defaults.md); the user's setting is restored on leaving
+    # identification-defaults.md); the user's setting is restored on leaving. The splits
+    # are fitted on the CPU's cores at once (each split's numbers its own, whichever
+    # thread fits it), taken in order
     with threadpool_limits(limits=1, user_api="blas"):
         if not model.waiting:
             samples.rows(model)  # the splits' rows are taken from the whole's
-        for train, test in zip(splits.train, splits.test):
-            these = samples if made is None else made(train)
-            fitted = fit_model(estimator, model, these.split(train), limits, warn=False)
-            measured.append(these.tau[test])
-            tested.append(every[test])
-            predicted.append(these.split(test).predict(fitted.model, fitted.fit.x))
-            scores.append(score_of(validation_metrics(measured[-1], predicted[-1], limits)))
+        done = []
+        # a validation inside a split's fit (a prior chosen by validation) runs in turn:
+        # the pool's threads would otherwise wait on themselves
+        nested = threading.current_thread().name.startswith(_THREADS)
+        for result in (map if nested else _POOL.map)(one, splits.train, splits.test):
+            done.append(result)
             if on_fit is not None:
                 on_fit()
+    measured, predicted, tested, scores = (list(x) for x in zip(*done))
     settings = {**describe(estimator, model, limits), "sigma": estimator.sigma}
     measured_all, predicted_all = np.concatenate(measured), np.concatenate(predicted)
     return CrossValidation(
