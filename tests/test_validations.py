@@ -13,7 +13,7 @@ import pytest
 import sedsabso_jax as sj
 from sedsabso_jax import cli
 from sedsabso_jax.identification import FitProblem
-from sedsabso_jax.identification._estimators._programme import programme as _programme
+from sedsabso_jax.identification._estimators._programme import _programme
 from sedsabso_jax.identification._fit._samples import Samples
 
 

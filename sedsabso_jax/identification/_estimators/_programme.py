@@ -206,7 +206,7 @@ def programme(n_joints: int, dim: int, n_extra: int, nonneg: tuple[int, ...],
     return _programme(threading.get_ident(), n_joints, dim, n_extra, nonneg, bodies)
 
 
-@functools.lru_cache(maxsize=64)
+@functools.lru_cache(maxsize=256)  # a few shapes on each of the split threads
 def _programme(thread: int, n_joints: int, dim: int, n_extra: int, nonneg: tuple[int, ...],
                bodies: tuple[int, ...]) -> Programme:
     return Programme(n_joints, dim, n_extra, nonneg, bodies)

@@ -120,9 +120,11 @@ def cross_validation_of(estimator: Estimator, model: TorqueModel, samples: Sampl
                         ) -> CrossValidation:
     """Fit ``estimator`` and ``model`` to each split's training samples of ``samples``
     (the recordings, stacked) and predict its test samples; ``validation`` the settings
-    of the validation that made the splits; ``on_fit()`` after each fit; ``made(train)``:
-    the samples of a split instead, made knowing only its training mask (a delay
-    searched on them)."""
+    of the validation that made the splits; ``on_fit()`` after each fit (in the splits'
+    order, on the calling thread); ``made(train)``: the samples of a split instead, made
+    knowing only its training mask (a delay searched on them). The splits are fitted on
+    several threads at once (``made`` is called from them); the numbers do not depend on
+    how many."""
     every = np.arange(samples.q.shape[0])
 
     def one(train: np.ndarray, test: np.ndarray) -> tuple:
