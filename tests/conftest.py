@@ -30,6 +30,10 @@ if CACHE_DIR is not None:
     os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", CACHE_DIR)
     os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.1")
 
+# The xdist workers already take the cores: each fits a validation's splits in turn (the
+# threads' numbers are the same, tests/test_validations.py), as do the commands they start.
+os.environ.setdefault("SEDSABSO_JAX_THREADS", "1")
+
 # Hypothesis draws the same examples on every run and keeps no example database, so a test
 # passes or fails the same way on every machine and in CI. HYPOTHESIS_PROFILE=explore draws
 # new random examples (with the database) to search for failures locally.

@@ -283,9 +283,10 @@ def test_splits_fitted_at_once_give_the_numbers_fitted_in_turn(monkeypatch):
     """A validation's splits are fitted on several threads at once: each split's fit
     (a searched Coulomb shape, the physically consistent conic fit) and its scores are
     those of the splits fitted one after another, in the splits' order, to the bit."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    from sedsabso_jax.identification._validation import _cross_validation
+    from sedsabso_jax.identification._validation._cross_validation import (
+        THREADS_VARIABLE,
+        split_threads,
+    )
 
     data = _run(11, noise=0.1, friction=lambda qd: 2.0 * np.tanh(qd / 0.05))
     robot = sj.robots.rs010n()
@@ -293,10 +294,14 @@ def test_splits_fitted_at_once_give_the_numbers_fitted_in_turn(monkeypatch):
     estimator = sj.PhysicallyConsistent(sj.WLS("residual"))
     validations = {}
     for workers in (1, 4):
-        monkeypatch.setattr(_cross_validation, "_POOL", ThreadPoolExecutor(workers))
+        monkeypatch.setenv(THREADS_VARIABLE, str(workers))
         validations[workers] = sj.cross_validate(robot, data, estimator, model,
                                                  validation=sj.PhaseFolds(6))
     in_turn, at_once = validations[1], validations[4]
     assert np.asarray(in_turn.fold_scores).tobytes() == np.asarray(at_once.fold_scores).tobytes()
     assert in_turn.residuals.tobytes() == at_once.residuals.tobytes()
     np.testing.assert_array_equal(in_turn.tested, at_once.tested)
+    for bad in ("0", "two", "-1"):
+        monkeypatch.setenv(THREADS_VARIABLE, bad)
+        with pytest.raises(ValueError, match=f"{THREADS_VARIABLE} must be a whole number"):
+            split_threads()

@@ -89,7 +89,7 @@ def fit_physical(model: TorqueModel, factor: Factorization, prior: Float[ArrayLi
     t0 = time.perf_counter()
     shape = programme(n, model.dim, n_extra, nonneg, tuple(int(k) for k in body[::10]))
     data = shape.data(M / scale, factor.c / scale, np.sqrt(lam) / scale,
-                          np.sqrt(lam) / scale * np.asarray(prior, dtype=float))
+                      np.sqrt(lam) / scale * np.asarray(prior, dtype=float))
     x, report = solve_data(shape.solver, data, WHAT, NONE_FOUND, started=t0)
     full, extra_values = shape.parameters(x)
     return PhysicalFit(np.concatenate([K @ full, extra_values]), full, report)

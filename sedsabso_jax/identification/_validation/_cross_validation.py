@@ -29,11 +29,35 @@ from ._splits import Splits
 TIE_FRACTION = DEFAULT.tie_fraction
 #: The one-standard-error rule's test (:meth:`~.._default._policy.Default.not_worse`).
 not_worse = DEFAULT.not_worse
-#: The threads that fit a validation's splits at once, one per core the process may use.
+#: The environment variable that sets how many threads fit a validation's splits at once
+#: (default: one per core the process may use; 1: in turn, on the calling thread).
+THREADS_VARIABLE = "SEDSABSO_JAX_THREADS"
 _THREADS = "sedsabso-jax-split"
-_POOL = ThreadPoolExecutor(
-    max_workers=len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
-    else os.cpu_count() or 1, thread_name_prefix=_THREADS)
+_POOLS: dict[int, ThreadPoolExecutor] = {}
+
+
+def split_threads() -> int:
+    """How many threads fit a validation's splits at once (:data:`THREADS_VARIABLE`)."""
+    given = os.environ.get(THREADS_VARIABLE)
+    if given is None:
+        return (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+                else os.cpu_count() or 1)
+    if not given.strip().isdigit() or int(given) < 1:
+        raise ValueError(f"{THREADS_VARIABLE} must be a whole number of threads >= 1, got "
+                         f"{given!r}")
+    return int(given)
+
+
+def _map(one: Callable, *args):
+    """``map(one, *args)``, on :func:`split_threads` threads at once; in turn where that
+    is one, or where called from a split's thread (a validation inside a split's fit: the
+    threads would otherwise wait on themselves)."""
+    threads = split_threads()
+    if threads == 1 or threading.current_thread().name.startswith(_THREADS):
+        return map(one, *args)
+    if threads not in _POOLS:
+        _POOLS[threads] = ThreadPoolExecutor(threads, thread_name_prefix=_THREADS)
+    return _POOLS[threads].map(one, *args)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -123,8 +147,8 @@ def cross_validation_of(estimator: Estimator, model: TorqueModel, samples: Sampl
     of the validation that made the splits; ``on_fit()`` after each fit (in the splits'
     order, on the calling thread); ``made(train)``: the samples of a split instead, made
     knowing only its training mask (a delay searched on them). The splits are fitted on
-    several threads at once (``made`` is called from them); the numbers do not depend on
-    how many."""
+    :func:`split_threads` threads at once (``made`` is called from them); the numbers do
+    not depend on how many."""
     every = np.arange(samples.q.shape[0])
 
     def one(train: np.ndarray, test: np.ndarray) -> tuple:
@@ -143,10 +167,7 @@ def cross_validation_of(estimator: Estimator, model: TorqueModel, samples: Sampl
         if not model.waiting:
             samples.rows(model)  # the splits' rows are taken from the whole's
         done = []
-        # a validation inside a split's fit (a prior chosen by validation) runs in turn:
-        # the pool's threads would otherwise wait on themselves
-        nested = threading.current_thread().name.startswith(_THREADS)
-        for result in (map if nested else _POOL.map)(one, splits.train, splits.test):
+        for result in _map(one, splits.train, splits.test):
             done.append(result)
             if on_fit is not None:
                 on_fit()
