@@ -640,6 +640,10 @@ BUGS = [
      "        if last is None or last[0] != model.structure:",
      "        if last is None:", "a split predicting with the rows of the model it read last",
      VALIDATIONS, None),
+    ("identification/_estimators/_programme.py",
+     "return _programme(threading.get_ident(), n_joints",
+     "return _programme(0, n_joints", "one conic solver shared by the threads that fit "
+     "a validation's splits at once", VALIDATIONS, None),
 ]
 
 
