@@ -240,6 +240,28 @@ def test_a_delay_is_searched_and_kept_where_it_validates():
         late.with_chain(SignalChain(delay_s=20.0))
 
 
+
+def test_a_delay_is_searched_on_derived_signals_where_the_recorded_ones_lag():
+    """Recorded accelerations late (a causal logger filter) and torques logged 12 ms
+    late: the recorded signals disagree in time among themselves, so their delay lies at
+    the search's bound; the delay is then searched on the first chain derived from the
+    positions, found within a tenth of a sample and kept, and every later chain is
+    validated with its own delay before the cutoff is chosen."""
+    late = _lagging(_recording(30.0, 4, lagging_qdd=True), 0.012)
+    sel = sj.select_and_identify(ROBOT, late, limits=LIMITS, **FAST,
+                                 validation=CHOSEN).chain_selection
+    (on_loaded, at_bound, kept, index), (on_derived, found, kept_there, _) = sel.searches
+    assert on_loaded == "recorded" and at_bound.at_bound and not kept and index == -1
+    assert on_derived == "derived, 5 Hz" and kept_there and sel.delayed
+    assert abs(found.seconds - 0.012) < 0.1 / RATE
+    assert sel.labels[:3] == ("recorded", "derived, 5 Hz",
+                              f"derived, 5 Hz, torques {1e3 * found.seconds:+.3g} ms")
+    assert len(sel.chains) == 4 and all(  # the 10 Hz chain with its own delay
+        abs(c.delay_s - 0.012) < 0.1 / RATE for c in sel.chains[2:])
+    assert abs(sel.chain.delay_s - 0.012) < 0.1 / RATE
+    assert "every later chain was validated with its own delay" in "\n".join(
+        sel.delay_lines())
+
 def test_the_chains_report_their_work():
     """``progress`` names each chain's validation (one call per split), ``done`` grows
     and ends at ``total``; the chains' work is in the total from the first call."""

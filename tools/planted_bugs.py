@@ -644,6 +644,10 @@ BUGS = [
      "return _programme(threading.get_ident(), n_joints",
      "return _programme(0, n_joints", "one conic solver shared by the threads that fit "
      "a validation's splits at once", VALIDATIONS, None),
+    ("identification/_default/_signals.py",
+     "    if searches and searches[0][1].at_bound and derived is not None:",
+     "    if False:", "no delay searched on derived signals where the loaded ones' lay at "
+     "the bound", CHAIN, None),
 ]
 
 

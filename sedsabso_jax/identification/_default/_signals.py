@@ -19,10 +19,13 @@ split's delay searched on its training samples only (a delay at the search's bou
 all the data is not tried). Where it validates better by the same rule, it is the chain
 to beat, and every other chain is validated with its own delay searched likewise (a
 delay is the logger's, shared by every chain; searched first, it does not confound the
-choice of the cutoff). Where the loaded chain's delay is not kept and another chain is
-chosen, the delay is searched on the chosen chain's recordings and validated likewise (a
-logger's late velocities can make the loaded chain's delay meaningless). The delay
-applied is all the data's on the chosen chain. Why:
+choice of the cutoff). Where the loaded chain's delay lies at the search's bound (its
+signals disagree in time among themselves: a logger's late velocities), the first chain
+derived from the positions alone takes its place: its delay is searched and validated
+likewise, and where it validates better every other chain gets its own. Where no delay
+was kept so and another chain is chosen, the delay is searched on the chosen chain's
+recordings and validated likewise. The delay applied is all the data's on the chosen
+chain. Why:
 docs/explanation/identification-defaults.md."""
 
 from __future__ import annotations
@@ -57,10 +60,11 @@ class ChainSelection:
     ``trim_s`` dropped at each end while they were compared, and the model and
     estimator they were compared with; ``searches`` each delay search on all of a chain's
     data, ``(label of the chain searched on, DelayEstimate, kept, index of the chain
-    with it validated or -1)`` (the loaded chain's first: kept, every later chain was
-    validated with its own delay; then, where it was not kept and another chain was
-    chosen, that chain's), and ``split_delays`` each chain's delay [s] searched on each
-    split's training samples (empty: validated without a delay)."""
+    with it validated or -1)`` (the loaded chain's first; where it lay at the bound, the
+    first derived chain's; kept, every later chain was validated with its own delay;
+    then, where none was kept and another chain was chosen, that chain's), and
+    ``split_delays`` each chain's delay [s] searched on each split's training samples
+    (empty: validated without a delay)."""
 
     chains: tuple[SignalChain, ...]
     validations: tuple[CrossValidation, ...]
@@ -78,9 +82,15 @@ class ChainSelection:
 
     @property
     def delayed(self) -> bool:
-        """Whether the loaded chain's delay was kept (every chain validated with its
-        own)."""
-        return bool(self.searches) and self.searches[0][2]
+        """Whether a delay was kept before the other chains were validated (the loaded
+        chain's, or the first derived chain's where the loaded one's lay at the bound):
+        every later chain validated with its own."""
+        return any(self._leads(i) for i in range(len(self.searches)))
+
+    def _leads(self, i: int) -> bool:
+        """Whether search ``i`` was kept and chains were validated after it."""
+        _, _, kept, index = self.searches[i]
+        return kept and 0 <= index < len(self.chains) - 1
 
     @property
     def chain(self) -> SignalChain:
@@ -129,8 +139,8 @@ class ChainSelection:
                       f"splits' training samples" if splits else "")
             out.append(f"{where}: {found}; " + (
                 "not kept: it does not validate better than none" if not kept else
-                "it validates better: every chain was validated with its own delay" if i == 0
-                else "it validates better and is applied"))
+                "it validates better: every later chain was validated with its own delay"
+                if self._leads(i) else "it validates better and is applied"))
         return out
 
     def as_dict(self) -> dict:
@@ -281,7 +291,19 @@ def choose_chain(robot: Robot, recordings: list[Measurements],
 
     # the loaded chain with the delay first: kept, every chain gets its own
     incumbent = int(search(0, loaded)) if largest_delay_s is not None else 0
-    for chain in chains[1:]:
+    rest, searched = list(chains[1:]), {0}
+    derived = next((i for i, c in enumerate(rest) if c.derive), None)
+    if searches and searches[0][1].at_bound and derived is not None:
+        # the loaded signals disagree in time among themselves (a logger's lagging
+        # velocities): the delay searched on signals derived from the positions alone
+        chain = rest.pop(derived)
+        recs = made_by(chain)
+        samples = recorded(robot, recs)[1]
+        validate(chain, recs, samples)
+        searched.add(len(tried) - 1)
+        if search(len(tried) - 1, samples):
+            incumbent = len(tried) - 1
+    for chain in rest:
         recs = made_by(chain)
         samples = recorded(robot, recs)[1]
         if incumbent:
@@ -293,7 +315,7 @@ def choose_chain(robot: Robot, recordings: list[Measurements],
     scores = [cv for _, _, cv, _ in tried]
     best = min(scores, key=lambda cv: cv.score)
     chosen = incumbent if DEFAULT.not_worse(scores[incumbent], best) else scores.index(best)
-    if searches and not incumbent and chosen != 0:  # the chosen chain's own delay
+    if searches and not incumbent and chosen not in searched:  # the chosen chain's own
         if search(chosen, recorded(robot, tried[chosen][1])[1]):
             chosen = len(tried) - 1
     selection = ChainSelection(
