@@ -305,3 +305,46 @@ def test_splits_fitted_at_once_give_the_numbers_fitted_in_turn(monkeypatch):
         monkeypatch.setenv(THREADS_VARIABLE, bad)
         with pytest.raises(ValueError, match=f"{THREADS_VARIABLE} must be a whole number"):
             split_threads()
+
+
+def test_searches_on_threads_at_once_do_not_wait_on_each_other():
+    """Two threads each evaluating populations of 98 trials whose losses form a 21 x 21
+    Gram matrix and factorise it (as the searches of a validation's splits do with 21
+    moved columns): the Cholesky then runs on one of XLA's intra-op threads (after the
+    products) and waits there for the parts of its batch it gave the others, so two at
+    once on 2 cores waited on each other for ever; ``losses`` takes turns and both
+    finish. Each thread's losses are those of one thread alone."""
+    import threading
+
+    import equinox as eqx
+    import jax
+    import jax.numpy as jnp
+
+    from sedsabso_jax.identification._search._problem import losses
+
+    class Gram(eqx.Module):
+        X: jax.Array
+        g: jax.Array
+
+        def loss(self, u):
+            Y = self.X * jnp.exp(u[0] * jnp.linspace(0.0, 1.0, self.X.shape[1]))
+            factor = jax.scipy.linalg.cho_factor(Y.T @ Y)
+            return self.g @ jax.scipy.linalg.cho_solve(factor, self.g)
+
+    rng = np.random.default_rng(0)
+    problem = Gram(jnp.asarray(rng.standard_normal((200, 21))), jnp.ones(21))
+    U = rng.standard_normal((98, 3))
+    alone = losses(problem, U)
+    done = [0, 0]
+
+    def evaluate(i):
+        for _ in range(200):
+            assert losses(problem, U).tobytes() == alone.tobytes()
+            done[i] += 1
+
+    threads = [threading.Thread(target=evaluate, args=(i,), daemon=True) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=60)
+    assert done == [200, 200]

@@ -31,7 +31,7 @@ from ...optim._driver import minimise
 from ...optim._solver import AbstractSolver
 from .._options import as_float, as_int, check_count, check_number
 from ._newton import polish
-from ._problem import Searched, SearchProblem, fitness, losses, on_bounds
+from ._problem import COMPILED, Searched, SearchProblem, fitness, losses, on_bounds
 
 
 class AbstractSearch(eqx.Module):
@@ -185,16 +185,17 @@ class PopulationSearch(AbstractSearch):
                upper: np.ndarray) -> Searched:
         t0 = time.perf_counter()
         iterations = iterations_for_budget(self.solver, self.evaluations, lower.size)
-        res = minimise(fitness, self.solver, lower, upper, key=jax.random.key(self.seed),
-                       iterations=iterations, args=problem)
-        u = np.asarray(res.x, dtype=float).reshape(-1)
+        with COMPILED:
+            res = minimise(fitness, self.solver, lower, upper, key=jax.random.key(self.seed),
+                           iterations=iterations, args=problem)
+            u = np.asarray(res.x, dtype=float).reshape(-1)
+            f = float(np.asarray(res.f).reshape(-1)[0])
+            count = int(np.asarray(res.n_evaluations).reshape(-1)[0])
         # the start competes: a search never ends worse than where it began
         f_start = float(losses(problem, np.clip(start, lower, upper)[None])[0])
-        f = float(np.asarray(res.f).reshape(-1)[0])
         if f_start < f:
             u, f = np.clip(start, lower, upper), f_start
-        return Searched(u, f, int(np.asarray(res.n_evaluations).reshape(-1)[0]) + 1,
-                        time.perf_counter() - t0)
+        return Searched(u, f, count + 1, time.perf_counter() - t0)
 
     def settings(self) -> dict:
         return {"method": self.label, "solver": self.solver.label,
@@ -224,10 +225,11 @@ class LeastSquaresSearch(AbstractSearch):
     def search(self, problem: SearchProblem, start: np.ndarray, lower: np.ndarray,
                upper: np.ndarray) -> Searched:
         t0 = time.perf_counter()
-        u, steps = _levenberg_marquardt(problem, jnp.asarray(np.clip(start, lower, upper)),
-                                        jnp.asarray(lower), jnp.asarray(upper),
-                                        self.max_steps, self.rtol, self.atol)
-        u = np.clip(np.asarray(u, dtype=float), lower, upper)
+        with COMPILED:
+            u, steps = _levenberg_marquardt(problem, jnp.asarray(np.clip(start, lower, upper)),
+                                            jnp.asarray(lower), jnp.asarray(upper),
+                                            self.max_steps, self.rtol, self.atol)
+            u, steps = np.clip(np.asarray(u, dtype=float), lower, upper), int(steps)
         return Searched(u, float(losses(problem, u[None])[0]),
                         (int(steps) + 1) * (u.size + 1), time.perf_counter() - t0)
 

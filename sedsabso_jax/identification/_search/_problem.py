@@ -5,6 +5,7 @@ population's losses in one compiled call (:func:`losses`), and what a search ret
 from __future__ import annotations
 
 import dataclasses
+import threading
 from typing import Protocol
 
 import equinox as eqx
@@ -36,10 +37,22 @@ def fitness(u, problem: SearchProblem):
 
 _population = eqx.filter_jit(jax.vmap(fitness, (0, None)))
 
+#: One search's compiled call at a time in the process (:func:`losses`, and the
+#: population and least-squares searches), until its results are read. On the CPU,
+#: jaxlib's LAPACK kernels (the Cholesky factorisation of a population's normal
+#: equations, one per trial) split a large batch over XLA's intra-op threads and wait
+#: for the parts on the thread they run on: as many such calls at once as that pool has
+#: threads wait on each other for ever. A validation's splits, fitted on as many threads
+#: as there are cores, did (two threads, 98 trials of 21 moved columns, 2 cores:
+#: tests/test_validations.py); they take turns here.
+COMPILED = threading.RLock()
+
 
 def losses(problem: SearchProblem, U: Float[np.ndarray, "p k"]) -> Float[np.ndarray, " p"]:
-    """The losses of the population ``U`` (one row per member), in one vmapped call."""
-    return np.asarray(_population(np.asarray(U, dtype=float), problem))
+    """The losses of the population ``U`` (one row per member), in one vmapped call
+    (:data:`COMPILED`)."""
+    with COMPILED:
+        return np.asarray(_population(np.asarray(U, dtype=float), problem))
 
 
 def on_bounds(u: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
