@@ -231,7 +231,7 @@ class LeastSquaresSearch(AbstractSearch):
                                             self.max_steps, self.rtol, self.atol)
             u, steps = np.clip(np.asarray(u, dtype=float), lower, upper), int(steps)
         return Searched(u, float(losses(problem, u[None])[0]),
-                        (int(steps) + 1) * (u.size + 1), time.perf_counter() - t0)
+                        (steps + 1) * (u.size + 1), time.perf_counter() - t0)
 
 
 @eqx.filter_jit
