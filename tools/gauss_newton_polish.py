@@ -31,6 +31,7 @@ from sedsabso_jax.identification._search._methods import CoordinateSearch  # noq
 from sedsabso_jax.identification._search._newton import (  # noqa: E402
     FTOL,
     HALVINGS,
+    STEP,
     newton_step,
     polish,
 )
@@ -50,7 +51,8 @@ def gauss_newton(problem, u, loss, lower, upper, held, gain=1e-8, max_steps=20, 
         r, J = (np.asarray(x) for x in _residual_and_jacobian(jnp.asarray(u), problem))
         g, H = 2 * J.T @ r / r.size, 2 * J.T @ J / r.size
         at_bound = ((u <= lower) & (g > 0)) | ((u >= upper) & (g < 0))
-        d = newton_step(g, H, ~(at_bound | held), u, lower, upper, 4 * FTOL * scale / 1e-6)
+        floor = 4 * FTOL * scale / STEP ** 2  # the polish's: what rounding hides
+        d = newton_step(g, H, ~(at_bound | held), u, lower, upper, floor)
         if -0.5 * float(g @ d) <= gain * scale:
             break
         for _ in range(HALVINGS + 1):
