@@ -17,7 +17,7 @@ import pytest
 from test_cli_usability import _status  # the command's exit status, argparse's included
 
 import sedsabso_jax as sj
-from sedsabso_jax.dynamics import params_from_com
+from sedsabso_jax.dynamics import params_from_com, pseudo_inertia
 from sedsabso_jax.identification import dahl_state
 
 GAINS = np.array([0.3, 1.2, 0.8])
@@ -144,6 +144,30 @@ def test_noisy_currents_bias_least_squares_not_the_likelihood():
     # is below the noise where the biased gain fits it: 12 % on joint 3)
     np.testing.assert_allclose(found["ordinary"].settings["solution"]["sigma"],
                                noise * GAINS, rtol=0.2)
+
+
+def test_the_physical_method_refits_an_inconsistent_payload_of_the_given_mass():
+    """5 % noise in the currents and a payload of small inertia: the likelihood's payload
+    is no body (its pseudo-inertia has a negative eigenvalue); the physical method's is
+    one, at the fits' margin, of the given mass, by Clarabel's solve, with the same
+    gains (the method refits only the model's values)."""
+    robot = sj.robots.rs010n()
+    plant = np.asarray(robot.params).copy()
+    plant[24:34] += params_from_com(MASS, COM, np.diag([0.001, 0.002, 0.001]))
+    runs = [_currents(robot, p, _motion(3, 400, 20.0), GAINS, noise=0.05, seed=s)
+            for s, p in ((0, robot.params), (1, plant))]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a joint's calibration is poor
+        found = [sj.identify_drive_gains(robot, *runs, "link3", MASS, method=m,
+                                         model=sj.TorqueModel.of(robot, sj.Offset()))
+                 for m in (sj.identification.LikelihoodGains(),
+                           sj.identification.PhysicalGains())]
+    smallest = [np.linalg.eigvalsh(pseudo_inertia(f.payload10)).min() for f in found]
+    assert smallest[0] < -0.1 and 1e-6 <= smallest[1] < 1.05e-6, smallest
+    assert found[1].payload10[6] == MASS
+    solved = found[1].settings["solution"]["solver"]
+    assert solved["solver"] == "Clarabel (cvxpy)" and solved["status"] == "optimal"
+    np.testing.assert_array_equal(found[1].gains, found[0].gains)
 
 
 def test_a_joint_the_data_cannot_calibrate_is_reported(rs010n):

@@ -198,6 +198,11 @@ def test_consistent_estimate_kept_else_projected(rs010n_runs):
     assert np.linalg.eigvalsh(pseudo_inertia(noisy.unconstrained10)).min() < 0
     assert noisy.physical["status"] == "optimal" and not noisy.physical["already_consistent"]
     assert np.linalg.eigvalsh(pseudo_inertia(noisy.params10)).min() > 0
+    # the robot given: the payload's own conic fit, its smallest eigenvalue at the margin
+    # (1.0007e-6 measured; 1.08e-6 where Clarabel kept a trivial instance's equilibration)
+    given = sj.identify_payload(robot, loaded, "link3")
+    assert given.physical["solver"] == "Clarabel (cvxpy)" and given.physical["status"] == "optimal"
+    assert 1e-6 <= np.linalg.eigvalsh(pseudo_inertia(given.params10)).min() < 1.005e-6
 
 
 def test_the_data_are_what_identify_takes(rs010n_runs):

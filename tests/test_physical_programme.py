@@ -1,6 +1,8 @@
 """The links' physically consistent fit gives Clarabel what cvxpy would: its programme,
-built entry for entry (``_estimators/_programme.py``), against the same programme stated in
-cvxpy (``benchmarks.physical_fit.cvxpy_programme``) and canonicalised by cvxpy."""
+built entry for entry (``_estimators/_programme.py``), against the package's one statement
+of the physically consistent least squares (``_estimators/_conic.py``, with links)
+canonicalised by cvxpy; and that statement against the benchmark's own of the links' fit
+(``benchmarks.physical_fit.cvxpy_programme``, how the package solved it before 0.21)."""
 
 from __future__ import annotations
 
@@ -8,7 +10,7 @@ import numpy as np
 import pytest
 
 from benchmarks.physical_fit import cvxpy_programme
-from sedsabso_jax.identification._estimators._conic import solve_data
+from sedsabso_jax.identification._estimators._conic import solve_data, statement
 from sedsabso_jax.identification._estimators._programme import Programme
 
 #: (joints, rows of the factor, extras, extras >= 0, bodies among the extras)
@@ -29,20 +31,29 @@ def _instance(rng, n, dim, n_extra):
 @pytest.mark.parametrize("shape", SHAPES, ids=str)
 def test_the_programme_is_cvxpys_to_the_byte(shape):
     """Clarabel's data (``A, b, q`` and the cones) and its solution's parameters are
-    cvxpy's to the last bit, for several instances solved one after another in either
+    cvxpy's of the package's statement to the last bit (which states the benchmark's
+    programme), for several instances solved one after another in either
     order (the set-up solver keeps one equilibration, as cvxpy's does)."""
     import cvxpy as cp
 
     n, dim, n_extra, nonneg, bodies = shape
-    problem, (M, c, root, pulled), p, extras = cvxpy_programme(*shape)
+    s = statement(dim, n_extra, nonneg, bodies, links=n).set_up()
+    problem, (M, c, root, pulled), p, extras = s.problem, (s.M, s.c, s.root, s.pulled), s.p, s.z
+    benchmark, values = cvxpy_programme(*shape)[:2]
     ours = Programme(*shape)
     rng = np.random.default_rng(sum(map(len, (nonneg, bodies))) + dim)
     instances = [_instance(rng, n, dim, n_extra) for _ in range(3)]
     theirs = []
-    for values in instances:
-        M.value, c.value, root.value, pulled.value = values
+    for instance in instances:
+        M.value, c.value, root.value, pulled.value = instance
         data, _, _ = problem.get_problem_data(cp.CLARABEL)
-        mine = ours.data(*values)
+        for v, given in zip(values, instance):
+            v.value = given
+        reference = benchmark.get_problem_data(cp.CLARABEL)[0]
+        assert (reference["A"] != data["A"]).nnz == 0
+        assert np.array_equal(reference["b"], data["b"])
+        assert np.array_equal(reference["c"], data["c"])
+        mine = ours.data(*instance)
         for key, cvx in (("A", data["A"]), ("b", data["b"]), ("q", data["c"])):
             got = mine[key]
             if key == "A":
@@ -60,3 +71,20 @@ def test_the_programme_is_cvxpys_to_the_byte(shape):
         x, report = solve_data(ours.solver, ours.data(*instances[k]), "test", "none")
         assert report["status"] == "optimal"
         assert np.concatenate(ours.parameters(x)).tobytes() == theirs[k].tobytes()
+
+
+def test_a_shared_statement_is_one_per_thread():
+    """The terms-only fit's statement, shared by the fits of one shape, is one per thread
+    (the threads that fit a validation's splits at once would otherwise set one problem's
+    data under each other's solve), and the same one again on the same thread."""
+    import threading
+
+    from sedsabso_jax.identification._estimators._conic import shared_statement
+
+    shape = (12, 12, (11,), (0,))
+    here = shared_statement(*shape)
+    there = []
+    thread = threading.Thread(target=lambda: there.append(shared_statement(*shape)))
+    thread.start()
+    thread.join()
+    assert shared_statement(*shape) is here and there[0] is not here

@@ -327,9 +327,10 @@ BUGS = [
      "            np.zeros(10 * nb), np.tile(-link[np.nonzero(link)], nb),",
      "a body term's parameters not tied to its pseudo-inertia (links constrained)",
      PAYLOAD, None),
-    ("identification/_estimators/_physical.py",
-     "            np.linalg.eigvalsh(pseudo_inertia(extras[k:k + 10])).min() >= PSD_MARGIN",
-     "            True", "an inconsistent payload taken as consistent (links free)",
+    ("identification/_estimators/_conic.py",
+     "np.linalg.eigvalsh(pseudo_inertia(p)).min() >= PSD_MARGIN for p in own",
+     "True for p in own", "an inconsistent payload taken as consistent (links free, robot given, "
+     "gains)",
      PAYLOAD, None),
     ("identification/_model/_load.py",
      "        rigid = model.rigid_values(np.asarray(values, dtype=float))",
@@ -652,6 +653,26 @@ BUGS = [
      "import contextlib\nCOMPILED = contextlib.nullcontext()",
      "populations evaluated on threads at once (jaxlib's batched Cholesky then waits on "
      "itself)", ["tests/test_validations.py"], None),
+    ("identification/_estimators/_conic.py",
+     "            constraints.append(own[list(np.flatnonzero(body.index < 0))]\n"
+     "                               == body.known[body.index < 0])",
+     "            pass", "the gains' physical payload free of its given mass",
+     ["tests/test_drive_gains.py"], None),
+    ("identification/_estimators/_conic.py",
+     "        out[placed] = z[self.index[placed]] / self.weight[placed]",
+     "        out[placed] = z[self.index[placed]]",
+     "a placed body's parameters read in the unknowns' scale", [*PAYLOAD,
+                                                               "tests/test_drive_gains.py"],
+     None),
+    ("identification/_payload/_least_squares.py",
+     "        xs, report = statement(M.shape[0], M.shape[1], nonneg, bodies).solve(",
+     "        xs, report = statement(M.shape[0], M.shape[1], nonneg, bodies).set_up().solve(",
+     "a payload's or the gains' one conic fit equilibrated on a trivial instance, not its "
+     "own data", [*PAYLOAD, "tests/test_drive_gains.py"], None),
+    ("identification/_estimators/_conic.py",
+     "return _shared(threading.get_ident(), dim", "return _shared(0, dim",
+     "the terms-only fit's statement shared by the threads that fit a validation's splits",
+     ["tests/test_physical_programme.py"], None),
 ]
 
 

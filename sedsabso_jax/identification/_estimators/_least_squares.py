@@ -36,7 +36,8 @@ from ._estimator import (
     weigh,
     weighting_settings,
 )
-from ._physical import PSD_MARGIN, fit_bodies, fit_physical
+from ._physical import fit_bodies, fit_physical
+from ._programme import PSD_MARGIN
 
 #: An estimator's ``sigma`` as kept: None, a weighting's name, or one number per joint.
 SigmaOption = str | tuple[float, ...] | None

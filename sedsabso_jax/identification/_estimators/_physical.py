@@ -9,9 +9,10 @@ so the constraint is a linear matrix inequality. Positive mass, a positive-defin
 satisfying the triangle inequalities and a centre of mass inside the body all follow.
 
 The fit (:func:`fit_physical`) minimises, over every link's ``J`` (eigenvalues >=
-:data:`PSD_MARGIN`), the friction coefficients (``Fc, Fv >= 0``, ``FQ >= 0``) and the
-torque offsets (free), armature and motor friction (``>= 0``), and the columns of a term
-that is a body (a payload: its own pseudo-inertia positive semidefinite)::
+:data:`~._programme.PSD_MARGIN`), the friction coefficients (``Fc, Fv >= 0``, ``FQ >=
+0``) and the torque offsets (free), armature and motor friction (``>= 0``), and the
+columns of a term that is a body (a payload: its own pseudo-inertia positive
+semidefinite)::
 
     ||W x - b||^2 + lambda ||p - p_prior||^2,     x = [K p, extras]
 
@@ -31,18 +32,16 @@ solution finite. A solve that is not optimal is an error; an inaccurate one a wa
 from __future__ import annotations
 
 import dataclasses
-import functools
 import time
 
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
-from ...dynamics._inertia import pseudo_inertia
 from ...dynamics._robot import N_LINK_PARAMETERS
 from ...optim._linear import Factorization
 from .._model._torque_model import TorqueModel
-from ._conic import NOT_SOLVED, solve, solve_data
-from ._programme import PSD_MARGIN, inertial_params, programme
+from ._conic import NOT_SOLVED, satisfied, shared_statement, solve_data
+from ._programme import programme
 
 #: Smallest pull to the prior, relative to the mean curvature of the data term.
 RIDGE = 1e-9
@@ -54,7 +53,7 @@ WHAT, NONE_FOUND = "physically consistent fit", "no consistent parameters were f
 class PhysicalFit:
     """What :func:`fit_physical` returns: the model's values (base parameters, then the
     extras), the full parameters (12 per link, or None) and the solver's report
-    (:func:`~._conic.solve`)."""
+    (:meth:`~._conic.Statement.solve`)."""
 
     values: np.ndarray
     full_params: np.ndarray | None
@@ -95,33 +94,6 @@ def fit_physical(model: TorqueModel, factor: Factorization, prior: Float[ArrayLi
     return PhysicalFit(np.concatenate([K @ full, extra_values]), full, report)
 
 
-@functools.lru_cache(maxsize=32)
-def _bodies_programme(dim: int, rank: int, nonneg: tuple[int, ...], bodies: tuple[int, ...]):
-    """The least squares of :func:`fit_bodies` for one shape of model, its data as cvxpy
-    parameters: canonicalised once, by a first solve of the trivial instance (whose
-    equilibration every later solve keeps, as :class:`~._programme.Programme`'s)."""
-    import cvxpy as cp
-
-    M = cp.Parameter((dim, dim), name="M")
-    c = cp.Parameter(dim, name="c")
-    root_ridge = cp.Parameter(nonneg=True, name="root_ridge")
-    pulled = cp.Parameter(dim, name="root_ridge_start")
-    x = cp.Variable(dim, name="x")
-    extras = x[rank:]
-    constraints = [extras[list(nonneg)] >= 0] if nonneg else []
-    for k, start in enumerate(bodies):
-        B = cp.Variable((4, 4), symmetric=True, name=f"body{k + 1}")
-        constraints += [B - PSD_MARGIN * np.eye(4) >> 0,
-                        extras[start:start + 10] == cp.hstack(inertial_params(B))]
-    problem = cp.Problem(cp.Minimize(cp.norm(cp.hstack([M @ x - c, root_ridge * x - pulled]),
-                                             2)), constraints)
-    parameters = {"M": M, "c": c, "root_ridge": root_ridge, "pulled": pulled}
-    for v in parameters.values():
-        v.value = np.ones(v.shape) if v is root_ridge else np.zeros(v.shape)
-    problem.solve(solver=cp.CLARABEL)
-    return problem, parameters, x
-
-
 def fit_bodies(model: TorqueModel, factor: Factorization) -> PhysicalFit:
     """Least squares with the constraints of the model's terms only: their coefficients
     ``>= 0`` where a physical body has them so, and the terms that are bodies (a
@@ -134,22 +106,14 @@ def fit_bodies(model: TorqueModel, factor: Factorization) -> PhysicalFit:
     rank = model.base.rank
     M = factor.R @ np.eye(model.dim)[factor.perm]
     scale = max(float(np.linalg.norm(factor.c)), 1e-300)
-    ridge = RIDGE * float(np.sum(M ** 2)) / model.dim
-    nonneg = tuple(int(k) for k in np.flatnonzero(model.nonnegative[rank:]))
-    body = np.flatnonzero(model.bodies[rank:])
+    root = np.sqrt(RIDGE * float(np.sum(M ** 2)) / model.dim) / scale
+    nonneg = tuple(rank + int(k) for k in np.flatnonzero(model.nonnegative[rank:]))
+    bodies = tuple(rank + int(k) for k in np.flatnonzero(model.bodies[rank:])[::10])
     t0 = time.perf_counter()
     free = factor.solve()
-    extras = free[rank:]
-    if np.all(extras[list(nonneg)] >= 0) and all(
-            np.linalg.eigvalsh(pseudo_inertia(extras[k:k + 10])).min() >= PSD_MARGIN
-            for k in body[::10]):
+    if satisfied(free, nonneg, bodies):
         return PhysicalFit(free, None, {"solver": NOT_SOLVED, "status": "optimal",
                                         "iterations": 0, "seconds": time.perf_counter() - t0})
-    problem, values, x = _bodies_programme(model.dim, rank, nonneg,
-                                           tuple(int(k) for k in body[::10]))
-    values["M"].value = M / scale
-    values["c"].value = factor.c / scale
-    values["root_ridge"].value = np.sqrt(ridge) / scale
-    values["pulled"].value = np.sqrt(ridge) / scale * free
-    report = solve(problem, WHAT, NONE_FOUND, started=t0)
-    return PhysicalFit(np.asarray(x.value, dtype=float), None, report)
+    x, report = shared_statement(model.dim, model.dim, nonneg, bodies).solve(
+        M / scale, factor.c / scale, root, root * free, WHAT, NONE_FOUND, started=t0)
+    return PhysicalFit(x, None, report)

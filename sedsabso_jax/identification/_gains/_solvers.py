@@ -18,7 +18,8 @@ compressed once, :mod:`._compressed`). On the weighted rows ``W theta ~ b``:
   values at those gains over the payloads a real body can be (its pseudo-inertia positive
   semidefinite, Wensing, Kim & Slotine, IEEE RA-L 2018) with its mass (and centre of mass)
   as known, and the model's terms' coefficients ``>= 0`` where a physical body has them
-  so (a conic programme, Clarabel through cvxpy).
+  so (the conic programme of :func:`~.._estimators._conic.statement`, Clarabel through
+  cvxpy).
 
 The standard deviations are those of the least squares (or of the likelihood's
 linearisation) at the returned estimate (:func:`~._compressed.std`).
@@ -33,11 +34,9 @@ from typing import ClassVar
 import equinox as eqx
 import numpy as np
 
-from ...dynamics._inertia import pseudo_inertia
-from .._estimators._conic import NOT_SOLVED, solve
-from .._estimators._physical import PSD_MARGIN, RIDGE
+from .._estimators._conic import NOT_SOLVED, Placed, satisfied
 from .._fit._uncertainty import RANK_TOLERANCE
-from .._payload._least_squares import LinearFit, pseudo_inertia_map
+from .._payload._least_squares import LinearFit
 from ._compressed import compress
 from ._equations import GainEquations, payload_columns
 from ._likelihood import gain_map, maximum_likelihood
@@ -109,38 +108,20 @@ def total(W: np.ndarray, b: np.ndarray) -> np.ndarray:
 def physical(eq: GainEquations, fit: LinearFit) -> tuple[np.ndarray, dict]:
     """The least squares of ``fit``'s rows over consistent payloads of the known mass and
     nonnegative term coefficients (module docstring): ``(theta, solver report)``."""
-    import cvxpy as cp
-
-    free, u = eq.free, fit.scale.size
-    position = {int(c): i for i, c in enumerate(free)}
-    S, s0 = np.zeros((10, u)), np.zeros(10)
+    position = {int(c): i for i, c in enumerate(eq.free)}
+    index, known = np.full(10, -1), np.zeros(10)
     for row, column in enumerate(payload_columns(eq.model)):
         if int(column) in position:
-            S[row, position[int(column)]] = 1.0
+            index[row] = position[int(column)]
         else:
-            s0[row] = eq.known[list(eq.fixed).index(column)]
-    nonneg = [position[int(c)] for c in np.flatnonzero(eq.model.nonnegative)
-              if int(c) in position]
-    if np.all(fit.x[nonneg] >= 0) and np.linalg.eigvalsh(
-            pseudo_inertia(S @ fit.x + s0)).min() >= PSD_MARGIN:
+            known[row] = eq.known[list(eq.fixed).index(column)]
+    nonneg = tuple(position[int(c)] for c in np.flatnonzero(eq.model.nonnegative)
+                   if int(c) in position)
+    payload = Placed(index, np.where(index >= 0, fit.scale[np.maximum(index, 0)], 1.0), known)
+    if satisfied(fit.x * fit.scale, nonneg, (payload,)):
         return fit.x, {"solver": NOT_SOLVED, "status": "optimal"}
-    scale = fit.scale
-    M = fit.s[:, None] * fit.Vt  # ||W theta - b||^2 = ||M (scale theta) - U^T b||^2 + const
-    norm = max(float(np.linalg.norm(fit.Ub)), 1e-300)
-    ridge = np.sqrt(RIDGE * float(np.sum(M ** 2)) / u)
-    xs = cp.Variable(u, name="theta_scaled")
-    J = cp.Variable((4, 4), symmetric=True, name="payload")
-    theta = cp.multiply(1.0 / scale, xs)
-    constraints = [J - PSD_MARGIN * np.eye(4) >> 0,
-                   S @ theta + s0 == pseudo_inertia_map() @ cp.hstack(
-                       [J[i, j] for i in range(4) for j in range(4)])]
-    if nonneg:
-        constraints.append(xs[nonneg] >= 0)
-    objective = cp.norm(cp.hstack([(M @ xs - fit.Ub) / norm,
-                                   ridge * (xs - fit.x * scale) / norm]), 2)
-    problem = cp.Problem(cp.Minimize(objective), constraints)
-    report = solve(problem, "drive gains", "no consistent payload of the given mass was found")
-    return np.asarray(xs.value, dtype=float) / scale, report
+    return fit.constrained(nonneg, (payload,), "drive gains",
+                           "no consistent payload of the given mass was found")
 
 
 class AbstractGainMethod(eqx.Module):

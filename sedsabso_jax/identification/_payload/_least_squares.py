@@ -17,14 +17,15 @@ component along the null space of ``Ws``: the data do not determine that functio
 Physical consistency (Wensing, Kim & Slotine, IEEE RA-L 2018, as
 :mod:`~.._estimators._physical`): the payload is a body exactly when its pseudo-inertia
 ``J(p)`` is positive semidefinite. When the unconstrained ``p`` already is (eigenvalues
->= :data:`~.._estimators._physical.PSD_MARGIN`), it is the constrained optimum too and is
+>= :data:`~.._estimators._programme.PSD_MARGIN`), it is the constrained optimum too and is
 kept; otherwise :func:`consistent` solves::
 
     min ||S V^T xs - U^T b||  +  ridge     over robot values and J >= PSD_MARGIN 1
 
-a small semidefinite programme (Clarabel through cvxpy) with a ridge of
-:data:`~.._estimators._physical.RIDGE` times the data term's mean curvature toward the unconstrained
-estimate, which keeps directions the data leave free finite.
+a small semidefinite programme (:func:`~.._estimators._conic.statement`, Clarabel through
+cvxpy) with a ridge of :data:`~.._estimators._physical.RIDGE` times the data term's mean
+curvature toward the unconstrained estimate, which keeps directions the data leave free
+finite.
 """
 
 from __future__ import annotations
@@ -35,10 +36,9 @@ import numpy as np
 from jaxtyping import Float
 from threadpoolctl import threadpool_limits
 
-from ...dynamics._inertia import from_pseudo_inertia, pseudo_inertia
-from .._estimators._conic import solve
+from .._estimators._conic import Placed, satisfied, statement
 from .._estimators._estimator import Sigma, per_joint
-from .._estimators._physical import PSD_MARGIN, RIDGE
+from .._estimators._physical import RIDGE
 from .._fit._uncertainty import NULL_COMPONENT, RANK_TOLERANCE
 
 
@@ -103,6 +103,20 @@ class LinearFit:
         variance = float(residual @ residual) / dof if dof > 0 else float("nan")
         return cls(x, residual, variance, scale, s, Vt, Ub, rank)
 
+    def constrained(self, nonneg: tuple[int, ...], bodies: tuple[Placed, ...], what: str,
+                    none_found: str) -> tuple[np.ndarray, dict]:
+        """The least squares of these rows over unknowns that meet the constraints of
+        :func:`~.._estimators._conic.statement` (``nonneg`` and ``bodies`` placed in the
+        scaled unknowns ``xs = scale x``), with a pull of
+        :data:`~.._estimators._physical.RIDGE` times the data term's mean curvature
+        toward ``x``: ``(x, the solver's report)``."""
+        M = self.s[:, None] * self.Vt  # ||W x - b||^2 = ||M xs - U^T b||^2 + const
+        norm = max(float(np.linalg.norm(self.Ub)), 1e-300)
+        root = np.sqrt(RIDGE * float(np.sum(M ** 2)) / self.scale.size) / norm
+        xs, report = statement(M.shape[0], M.shape[1], nonneg, bodies).solve(
+            M / norm, self.Ub / norm, root, root * self.x * self.scale, what, none_found)
+        return xs / self.scale, report
+
     def determined(self, G: Float[np.ndarray, "k d"]) -> np.ndarray:
         """Whether the data determine each row's function ``G x``."""
         g = np.atleast_2d(G) / self.scale
@@ -130,34 +144,13 @@ class LinearFit:
         return float(np.sqrt(eig[-1] / eig[0]))
 
 
-def pseudo_inertia_map() -> Float[np.ndarray, "10 16"]:
-    """``A`` with ``p = A vec(J)`` for a symmetric pseudo-inertia ``J`` (row-major)."""
-    return np.stack([from_pseudo_inertia(e.reshape(4, 4)) for e in np.eye(16)], axis=1)
-
-
 def is_consistent(p10: Float[np.ndarray, " 10"]) -> bool:
     """Whether ``p10``'s pseudo-inertia has eigenvalues >= the physical fits' margin."""
-    return bool(np.linalg.eigvalsh(pseudo_inertia(p10)).min() >= PSD_MARGIN)
+    return satisfied(p10, bodies=(0,))
 
 
 def consistent(fit: LinearFit, n_robot: int) -> tuple[np.ndarray, dict]:
     """The physically consistent least squares (module docstring) of ``fit``'s rows whose
     last 10 columns are the payload's: ``(x, solver report)``."""
-    import cvxpy as cp
-
-    scale, d = fit.scale, fit.scale.size
-    M = fit.s[:, None] * fit.Vt  # ||W x - b||^2 = ||M xs - U^T b||^2 + const
-    norm = max(float(np.linalg.norm(fit.Ub)), 1e-300)
-    J = cp.Variable((4, 4), symmetric=True, name="J")
-    p = pseudo_inertia_map() @ cp.hstack([J[i, j] for i in range(4) for j in range(4)])
-    robot = cp.Variable(n_robot, name="robot") if n_robot else None
-    xs = cp.hstack([robot, cp.multiply(scale[n_robot:], p)]) if robot is not None \
-        else cp.multiply(scale, p)
-    ridge = np.sqrt(RIDGE * float(np.sum(M ** 2)) / d)
-    objective = cp.norm(cp.hstack([(M @ xs - fit.Ub) / norm,
-                                   ridge * (xs - fit.x * scale) / norm]), 2)
-    problem = cp.Problem(cp.Minimize(objective), [J - PSD_MARGIN * np.eye(4) >> 0])
-    report = solve(problem, "payload", "no consistent payload was found")
-    x = np.concatenate([np.asarray(robot.value, dtype=float) / scale[:n_robot]
-                        if robot is not None else np.zeros(0), np.asarray(p.value, dtype=float)])
-    return x, report
+    payload = Placed(n_robot + np.arange(10), fit.scale[n_robot:], np.zeros(10))
+    return fit.constrained((), (payload,), "payload", "no consistent payload was found")
