@@ -6,7 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import sedsabso_jax as sj
-from sedsabso_jax.dynamics._regressor import _regressor_jit
+from sedsabso_jax.dynamics._regressor import _regressor_jit, padded_samples
 
 
 def test_batched_equals_unbatched(rng):
@@ -58,6 +58,34 @@ def test_second_call_does_not_recompile(rng):
     sj.regressor(other, q, qd, qdd).block_until_ready()
     sj.inverse_dynamics(other, other.params, q, qd, qdd).block_until_ready()
     assert _regressor_jit._cache_size() == before
+
+
+def test_nearby_lengths_share_one_compilation(rng):
+    """Recordings of nearby lengths (a validation's outer splits) are computed at one
+    padded length: one compilation (seconds, hundreds of memory maps each), the same rows
+    as their own length's program, and no padding row returned."""
+    robot = sj.robots.rs010n()
+    q, qd, qdd = (jnp.asarray(a) for a in rng.normal(size=(3, 1040, 3)))
+    sj.regressor(robot, q[:1030], qd[:1030], qdd[:1030]).block_until_ready()
+    before = _regressor_jit._cache_size()
+    lengths = (1025, 1039, 1040)  # 1025..1088 share one padded length
+    found = [(sj.regressor(robot, q[:T], qd[:T], qdd[:T]),
+              sj.inverse_dynamics(robot, robot.params, q[:T], qd[:T], qdd[:T]))
+             for T in lengths]
+    assert _regressor_jit._cache_size() == before
+    for T, (Y, tau) in zip(lengths, found):
+        assert Y.shape == (T, 3, 36) and tau.shape == (T, 3)
+        own = _regressor_jit(robot, q[:T], qd[:T], qdd[:T], jnp.dtype(jnp.float64), 16)
+        assert np.array_equal(np.asarray(Y), np.asarray(own))
+
+
+def test_padded_lengths():
+    """At most an eighth more samples, exact up to 15, eight lengths per doubling."""
+    for samples in range(5000):
+        padded = padded_samples(samples)
+        assert samples <= padded <= samples + samples // 8 + (samples > 15)
+        assert samples > 15 or padded == samples
+    assert len({padded_samples(s) for s in range(1025, 2049)}) == 8
 
 
 def test_differentiable_in_q(rng):

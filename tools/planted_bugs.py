@@ -673,6 +673,17 @@ BUGS = [
      "return _shared(threading.get_ident(), dim", "return _shared(0, dim",
      "the terms-only fit's statement shared by the threads that fit a validation's splits",
      ["tests/test_physical_programme.py"], None),
+    ("dynamics/_regressor.py",
+     "    padded = samples if isinstance(q, jax.core.Tracer) else padded_samples(samples)",
+     "    padded = samples", "the regressor compiled for each length of recording",
+     ["tests/test_batching.py"], None),
+    ("dynamics/_regressor.py", "    return Y[:math.prod(batch)].reshape(",
+     "    return Y[-math.prod(batch):].reshape(",
+     "the padded regressor's rows taken from its end", ["tests/test_batching.py"], None),
+    ("dynamics/_regressor.py", "    step = 1 << max(0, samples.bit_length() - 4)",
+     "    step = 1 << max(0, samples.bit_length() - 2)",
+     "two padded lengths per doubling (up to half again the samples)",
+     ["tests/test_batching.py"], None),
 ]
 
 

@@ -153,10 +153,38 @@ def _regressor_jit(robot, q, qd, qdd, dtype, chunk=None):
     return _chunked(robot, q.astype(dtype), qd.astype(dtype), qdd.astype(dtype), chunk)
 
 
-def _chunk_for(robot: Robot, q, dtype, memory_budget):
-    samples = math.prod(q.shape[:-1])
-    return chunk_size(robot.n_joints, samples, itemsize=jnp.dtype(dtype).itemsize,
-                      memory_budget=memory_budget)
+def padded_samples(samples: int) -> int:
+    """The number of samples the regressor is compiled for: ``samples`` rounded up to
+    one of eight lengths per doubling (at most an eighth more; up to 15 samples exactly).
+    Recordings of nearby lengths (a validation's outer splits, recordings of one motion)
+    then share one compilation, which takes seconds and hundreds of memory maps; each
+    sample's row is computed alone, so the padding (zeros, dropped) changes no row."""
+    step = 1 << max(0, samples.bit_length() - 4)
+    return -(-samples // step) * step
+
+
+@partial(jax.jit, static_argnames="padded")
+def _flat_padded(q, qd, qdd, padded: int):
+    return [jnp.pad(x.reshape(-1, x.shape[-1]), ((0, padded - math.prod(x.shape[:-1])),
+                                                 (0, 0))) for x in (q, qd, qdd)]
+
+
+@partial(jax.jit, static_argnames="batch")
+def _unpadded(Y, batch: tuple[int, ...]):
+    return Y[:math.prod(batch)].reshape(batch + Y.shape[1:])
+
+
+def _compiled_regressor(robot: Robot, q, qd, qdd, dtype, memory_budget) -> Array:
+    """:func:`_regressor_jit` at :func:`padded_samples` samples (as given when traced)."""
+    batch = q.shape[:-1]
+    samples = math.prod(batch)
+    padded = samples if isinstance(q, jax.core.Tracer) else padded_samples(samples)
+    chunk = chunk_size(robot.n_joints, padded, itemsize=jnp.dtype(dtype).itemsize,
+                       memory_budget=memory_budget)
+    if padded == samples:
+        return _regressor_jit(robot, q, qd, qdd, jnp.dtype(dtype), chunk)
+    Y = _regressor_jit(robot, *_flat_padded(q, qd, qdd, padded), jnp.dtype(dtype), chunk)
+    return _unpadded(Y, batch)
 
 
 def regressor(robot: Robot, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
@@ -167,13 +195,12 @@ def regressor(robot: Robot, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike
     ``q, qd, qdd`` of shape ``(..., n)`` (leading axes broadcast) give ``(..., n, 12 n)``,
     columns ordered as :attr:`Robot.param_names`. Computed in ``dtype`` (float64 by
     default). ``memory_budget``: bytes the samples may take at once on an accelerator
-    (:func:`chunk_size`; at least 1 MB). Compiled once per robot structure, batch shape,
-    dtype and chunk size.
+    (:func:`chunk_size`; at least 1 MB). Compiled once per robot structure, dtype and
+    number of samples rounded up (:func:`padded_samples`).
     """
     check_memory_budget(memory_budget)
     q, qd, qdd = joint_arrays(robot, ("q", q), ("qd", qd), ("qdd", qdd), dtype=dtype)
-    chunk = _chunk_for(robot, q, dtype, memory_budget)
-    return _regressor_jit(robot, q, qd, qdd, jnp.dtype(dtype), chunk)
+    return _compiled_regressor(robot, q, qd, qdd, dtype, memory_budget)
 
 
 def inverse_dynamics(robot: Robot, params: Float[ArrayLike, " p"],
@@ -191,6 +218,5 @@ def inverse_dynamics(robot: Robot, params: Float[ArrayLike, " p"],
             f"(12 per joint), got {params.shape}"
         )
     # Reuses the regressor's compiled code: one compilation serves both functions.
-    chunk = _chunk_for(robot, q, jnp.float64, memory_budget)
-    Y = _regressor_jit(robot, q, qd, qdd, jnp.dtype(jnp.float64), chunk)
+    Y = _compiled_regressor(robot, q, qd, qdd, jnp.float64, memory_budget)
     return jnp.matmul(Y, params, precision=jax.lax.Precision.HIGHEST)
