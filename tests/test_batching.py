@@ -61,22 +61,26 @@ def test_second_call_does_not_recompile(rng):
 
 
 def test_nearby_lengths_share_one_compilation(rng):
-    """Recordings of nearby lengths (a validation's outer splits) are computed at one
-    padded length: one compilation (seconds, hundreds of memory maps each), the same rows
-    as their own length's program, and no padding row returned."""
+    """The base regressor of recordings of nearby lengths (a validation's outer splits)
+    is computed at one padded length: one compilation (seconds, hundreds of memory maps
+    each), the same rows as their own length's program, and no padding row returned."""
     robot = sj.robots.rs010n()
+    base = sj.base_parameters(robot)
     q, qd, qdd = (jnp.asarray(a) for a in rng.normal(size=(3, 1040, 3)))
-    sj.regressor(robot, q[:1030], qd[:1030], qdd[:1030]).block_until_ready()
+    base.regressor(q[:1030], qd[:1030], qdd[:1030]).block_until_ready()
     before = _regressor_jit._cache_size()
     lengths = (1025, 1039, 1040)  # 1025..1088 share one padded length
-    found = [(sj.regressor(robot, q[:T], qd[:T], qdd[:T]),
-              sj.inverse_dynamics(robot, robot.params, q[:T], qd[:T], qdd[:T]))
-             for T in lengths]
+    found = [base.regressor(q[:T], qd[:T], qdd[:T]) for T in lengths]
+    found.append(base.regressor(q[:1040].reshape(8, 130, 3), qd[:1040].reshape(8, 130, 3),
+                                qdd[:1040].reshape(8, 130, 3)).reshape(1040, 3, -1))
     assert _regressor_jit._cache_size() == before
-    for T, (Y, tau) in zip(lengths, found):
-        assert Y.shape == (T, 3, 36) and tau.shape == (T, 3)
+    for T, Y in zip((*lengths, 1040), found):
+        assert Y.shape == (T, 3, base.rank)
         own = _regressor_jit(robot, q[:T], qd[:T], qdd[:T], jnp.dtype(jnp.float64), 16)
-        assert np.array_equal(np.asarray(Y), np.asarray(own))
+        assert np.array_equal(np.asarray(Y), np.asarray(own)[..., list(base.indices)])
+    # the full regressor, as a user times it, at its own length: no copy of the rows
+    sj.regressor(robot, q[:1027], qd[:1027], qdd[:1027]).block_until_ready()
+    assert _regressor_jit._cache_size() == before + 4
 
 
 def test_padded_lengths():

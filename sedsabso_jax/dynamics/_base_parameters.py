@@ -21,6 +21,7 @@ import scipy.linalg
 from jax.typing import DTypeLike
 from jaxtyping import Array, ArrayLike, Float
 
+from ._regressor import padded_regressor, take
 from ._regressor import regressor as _full_regressor
 from ._robot import LINK_PARAMETERS, N_LINK_PARAMETERS, Robot
 
@@ -78,9 +79,12 @@ class BaseParameters(eqx.Module):
                   qdd: Float[ArrayLike, "*batch n"], *, dtype: DTypeLike = jnp.float64,
                   memory_budget: int | None = None) -> Float[Array, "... n rank"]:
         """Base regressor ``(..., n) -> (..., n, rank)``: the kept columns of ``Y``
-        (``memory_budget``: see :func:`~sedsabso_jax.regressor`)."""
-        Y = _full_regressor(self.robot, q, qd, qdd, dtype=dtype, memory_budget=memory_budget)
-        return Y[..., jnp.asarray(self.indices)]
+        (``memory_budget``: see :func:`~sedsabso_jax.regressor`). Compiled once per robot
+        structure, dtype and number of samples rounded up
+        (:func:`~sedsabso_jax.dynamics._regressor.padded_samples`)."""
+        Y, batch = padded_regressor(self.robot, q, qd, qdd, dtype=dtype,
+                                    memory_budget=memory_budget)
+        return take(Y, batch, tuple(self.indices))
 
     def joint_columns(self, parameter: str) -> tuple[int | None, ...]:
         """For each joint, the base column that is its link's ``parameter`` (one of

@@ -154,11 +154,11 @@ def _regressor_jit(robot, q, qd, qdd, dtype, chunk=None):
 
 
 def padded_samples(samples: int) -> int:
-    """The number of samples the regressor is compiled for: ``samples`` rounded up to
+    """The number of samples :func:`padded_regressor` computes: ``samples`` rounded up to
     one of eight lengths per doubling (at most an eighth more; up to 15 samples exactly).
     Recordings of nearby lengths (a validation's outer splits, recordings of one motion)
     then share one compilation, which takes seconds and hundreds of memory maps; each
-    sample's row is computed alone, so the padding (zeros, dropped) changes no row."""
+    sample's row is computed alone, so the padding (zeros) changes no row."""
     step = 1 << max(0, samples.bit_length() - 4)
     return -(-samples // step) * step
 
@@ -169,22 +169,39 @@ def _flat_padded(q, qd, qdd, padded: int):
                                                  (0, 0))) for x in (q, qd, qdd)]
 
 
-@partial(jax.jit, static_argnames="batch")
-def _unpadded(Y, batch: tuple[int, ...]):
-    return Y[:math.prod(batch)].reshape(batch + Y.shape[1:])
+def _compiled(robot: Robot, q, qd, qdd, dtype, memory_budget, padded: int) -> Array:
+    """:func:`_regressor_jit` at ``padded`` samples (flattened where more than given)."""
+    chunk = chunk_size(robot.n_joints, padded, itemsize=jnp.dtype(dtype).itemsize,
+                       memory_budget=memory_budget)
+    if padded > math.prod(q.shape[:-1]):
+        q, qd, qdd = _flat_padded(q, qd, qdd, padded)
+    return _regressor_jit(robot, q, qd, qdd, jnp.dtype(dtype), chunk)
 
 
-def _compiled_regressor(robot: Robot, q, qd, qdd, dtype, memory_budget) -> Array:
-    """:func:`_regressor_jit` at :func:`padded_samples` samples (as given when traced)."""
+def padded_regressor(robot: Robot, q: Float[ArrayLike, "*batch n"],
+                     qd: Float[ArrayLike, "*batch n"], qdd: Float[ArrayLike, "*batch n"], *,
+                     dtype: DTypeLike = jnp.float64, memory_budget: int | None = None
+                     ) -> tuple[Float[Array, "S n p"], tuple[int, ...]]:
+    """:func:`regressor` at :func:`padded_samples` samples, flattened, and the batch
+    shape: ``(Y, batch)``, the rows past ``prod(batch)`` padding, for a caller that takes
+    rows of it anyway (:func:`take`; the base regressor's columns), so that recordings of
+    nearby lengths share one compilation."""
+    check_memory_budget(memory_budget)
+    q, qd, qdd = joint_arrays(robot, ("q", q), ("qd", qd), ("qdd", qdd), dtype=dtype)
     batch = q.shape[:-1]
     samples = math.prod(batch)
     padded = samples if isinstance(q, jax.core.Tracer) else padded_samples(samples)
-    chunk = chunk_size(robot.n_joints, padded, itemsize=jnp.dtype(dtype).itemsize,
-                       memory_budget=memory_budget)
-    if padded == samples:
-        return _regressor_jit(robot, q, qd, qdd, jnp.dtype(dtype), chunk)
-    Y = _regressor_jit(robot, *_flat_padded(q, qd, qdd, padded), jnp.dtype(dtype), chunk)
-    return _unpadded(Y, batch)
+    Y = _compiled(robot, q, qd, qdd, dtype, memory_budget, padded)
+    return Y.reshape((-1,) + Y.shape[-2:]), batch
+
+
+@partial(jax.jit, static_argnames=("batch", "columns"))
+def take(Y: Float[Array, "S n p"], batch: tuple[int, ...], columns: tuple[int, ...]
+         ) -> Float[Array, "*batch n c"]:
+    """The rows of :func:`padded_regressor`'s ``Y`` that are samples, in their ``batch``
+    shape, and their ``columns``: one copy."""
+    return Y[:math.prod(batch), :, np.asarray(columns)].reshape(batch + Y.shape[1:2]
+                                                                + (len(columns),))
 
 
 def regressor(robot: Robot, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
@@ -195,12 +212,13 @@ def regressor(robot: Robot, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike
     ``q, qd, qdd`` of shape ``(..., n)`` (leading axes broadcast) give ``(..., n, 12 n)``,
     columns ordered as :attr:`Robot.param_names`. Computed in ``dtype`` (float64 by
     default). ``memory_budget``: bytes the samples may take at once on an accelerator
-    (:func:`chunk_size`; at least 1 MB). Compiled once per robot structure, dtype and
-    number of samples rounded up (:func:`padded_samples`).
+    (:func:`chunk_size`; at least 1 MB). Compiled once per robot structure, batch shape,
+    dtype and chunk size (:func:`padded_regressor`: once per rounded number of samples).
     """
     check_memory_budget(memory_budget)
     q, qd, qdd = joint_arrays(robot, ("q", q), ("qd", qd), ("qdd", qdd), dtype=dtype)
-    return _compiled_regressor(robot, q, qd, qdd, dtype, memory_budget)
+    samples = math.prod(q.shape[:-1])
+    return _compiled(robot, q, qd, qdd, dtype, memory_budget, samples)
 
 
 def inverse_dynamics(robot: Robot, params: Float[ArrayLike, " p"],
@@ -218,5 +236,5 @@ def inverse_dynamics(robot: Robot, params: Float[ArrayLike, " p"],
             f"(12 per joint), got {params.shape}"
         )
     # Reuses the regressor's compiled code: one compilation serves both functions.
-    Y = _compiled_regressor(robot, q, qd, qdd, jnp.float64, memory_budget)
+    Y = _compiled(robot, q, qd, qdd, jnp.float64, memory_budget, math.prod(q.shape[:-1]))
     return jnp.matmul(Y, params, precision=jax.lax.Precision.HIGHEST)
