@@ -177,6 +177,7 @@ def evaluate(name, robot, data, limits, transmission, runs, folds=5,
             predicted[kind].append(found[DEFAULT].cross_validation.score)
             _release_compiled()
     nested_s = time.perf_counter() - t0
+    _release_compiled()
     full = fits(robot, data, limits, transmission, base, folds, settings, signals, kept)
     other_runs = {run: {label: nrms(_ident(f), judged_on(f, d), limits)
                         for label, f in full.items()} for run, d in runs.items()}

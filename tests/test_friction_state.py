@@ -247,6 +247,36 @@ def test_the_search_problem_is_the_least_squares_fit(plant, friction):
     np.testing.assert_allclose(J[:, k - 1], fd, atol=1e-5 * np.abs(fd).max())
 
 
+def test_a_term_that_reads_a_fit_is_searched_by_one_compilation(plant):
+    """Friction growing with the load reads a fit's rigid-body values, which differ
+    between a validation's splits; with the smooth Coulomb's scales searched its columns
+    move. Its search problems of two such fits are one compiled call (each split's
+    compiling anew made the scales cost minutes: the values are the call's arguments),
+    and each problem's loss is the least-squares fit of its own model."""
+    from sedsabso_jax.identification._search._problem import _population, losses
+
+    robot, base, data, _ = plant
+    samples = Samples(data.q, data.qd, data.qdd, data.tau)
+    model = sj.TorqueModel.of(robot, parse_friction("smooth:fit+load"), base=base)
+    rng = np.random.default_rng(2)
+    # two fits' values: each joint's load point its own
+    models = [model.reading(model.prior_values * rng.uniform(0.5, 1.5, model.dim))
+              for _ in range(2)]
+    assert models[0].terms[-1].load_point != models[1].terms[-1].load_point
+    w = np.array([1.0, 2.0, 0.5])
+    u = np.log([0.01, 0.03, 0.05])
+    found = []
+    for m in models:
+        problem = Projection.of(m, samples, w)
+        found.append(losses(problem, u[None])[0])
+        if len(found) == 1:
+            compiled = _population._cached._cache_size()
+        Y = samples.rows(m.with_nonlinear(np.exp(u)), every_column=True, cache=False)
+        assert found[-1] == pytest.approx(_least_squares_loss(Y, data.tau, w), rel=1e-7)
+    assert _population._cached._cache_size() == compiled
+    assert found[0] != pytest.approx(found[1], rel=1e-6)
+
+
 def test_a_search_is_kept_per_row_weights(plant):
     """A validation fits each split with several estimators: their searches are one where
     the search weighs the rows alike (OLS, Gautier's WLS: equal), another where it weighs

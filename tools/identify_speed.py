@@ -7,11 +7,15 @@ several processes each, and compare medians:
 
     for i in 1 2 3; do PYTHONPATH=OLD python tools/identify_speed.py; \\
         python tools/identify_speed.py; done
+
+``--smooth``: the smooth Coulomb's velocity scales searched as a second alternative to
+friction at rest (the nested benchmark's ``--kept smooth``).
 """
 
 from __future__ import annotations
 
 import json
+import sys
 import time
 import warnings
 
@@ -29,7 +33,13 @@ def main() -> None:
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        report = sj.select_and_identify(robot, data, held_out=held_out, limits=limits)
+        validation = sj.identification.DefaultValidation()
+        if "--smooth" in sys.argv[1:]:
+            at_rest = sj.Presliding(fitted=True, largest=0.02)
+            validation = sj.identification.DefaultValidation(kept=sj.identification.KeptTerms(
+                [(at_rest,), (at_rest, sj.SmoothCoulomb(fitted=True))]))
+        report = sj.select_and_identify(robot, data, held_out=held_out, limits=limits,
+                                        validation=validation)
     seconds = time.perf_counter() - t0
     print(json.dumps({"package": sj.__file__, "seconds": round(seconds, 1),
                       "friction": report.selection.chosen["friction"],

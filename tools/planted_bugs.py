@@ -684,6 +684,16 @@ BUGS = [
      "    step = 1 << max(0, samples.bit_length() - 2)",
      "two padded lengths per doubling (up to half again the samples)",
      ["tests/test_batching.py"], None),
+    ("identification/_fit/_projection.py",
+     "    read = tuple((i, field) for i in terms for field in model.terms[i].read_fields",
+     "    read = tuple((i, field) for i in () for field in model.terms[i].read_fields",
+     "what a term reads of a fit baked into its search's compiled code (one compilation "
+     "per split)", ["tests/test_friction_state.py"], None),
+    ("identification/_fit/_projection.py",
+     "            terms[i] = eqx.tree_at(lambda t: getattr(t, field), terms[i], value,",
+     "            terms[i] = eqx.tree_at(lambda t: getattr(t, field), terms[i], None,",
+     "a search's trials without what the terms read of a fit", ["tests/test_friction_state.py"],
+     None),
 ]
 
 

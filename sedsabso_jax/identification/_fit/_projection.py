@@ -58,7 +58,10 @@ class Recipe:
     ``(joint, columns)``, every joint; a joint's own friction meets few of the robot's
     columns).
     Equal (and hashed) by what the compiled code reads, so that problems of one model
-    structure share a compilation."""
+    structure share a compilation. ``read``: the (term, field) pairs of the terms it
+    computes that hold values read of a fit
+    (:attr:`~.._model._term.AbstractTerm.read_fields`), None in ``model``: the problem
+    carries them as arrays (they differ between a validation's splits)."""
 
     model: TorqueModel
     coulomb: bool
@@ -67,23 +70,34 @@ class Recipe:
     pair_joint: tuple[int, ...]
     moved_columns: int
     rows: tuple[tuple[int, tuple[int, ...]], ...]
+    read: tuple[tuple[int, str], ...] = ()
 
     @functools.cached_property
     def key(self) -> tuple:
         """What the compiled code reads of the model, by structure and values
         (:func:`~.._model._torque_model.tree_key`): its base, recordings and
-        transmission, the terms it computes and those that shape the Coulomb columns."""
+        transmission, the terms it computes and those that shape the Coulomb columns
+        (without what they read of a fit, :attr:`read`)."""
         m = self.model
         return (tree_key((m.base, m.recordings, m.transmission,
                           tuple(m.terms[i] for i in self.terms), m.shaping)),
                 self.coulomb, self.pair_column, self.pair_joint, self.moved_columns,
-                self.rows)
+                self.rows, self.read)
 
     def __hash__(self) -> int:
         return hash(self.key)
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Recipe) and self.key == other.key
+
+    def with_read(self, values: tuple) -> TorqueModel:
+        """The model with the fields :attr:`read` at ``values`` (floats, or a trial's
+        traced values)."""
+        terms = list(self.model.terms)
+        for (i, field), value in zip(self.read, values):
+            terms[i] = eqx.tree_at(lambda t: getattr(t, field), terms[i], value,
+                                   is_leaf=lambda x: x is None)
+        return eqx.tree_at(lambda m: m.terms, self.model, tuple(terms))
 
     @property
     def column_of_pair(self) -> np.ndarray:
@@ -110,6 +124,7 @@ class Projection(eqx.Module):
     PAtb: Float[Array, " p"]        # their least-squares values without the moved ones
     floor: Float[Array, ""]         # b^T b - b^T A P A^T b: their residual
     rows: Float[Array, ""]          # the weighted rows fitted (samples x joints)
+    read: tuple                     # the values recipe.read names, as arrays
     recipe: Recipe = eqx.field(static=True)
 
     @classmethod
@@ -165,12 +180,15 @@ class Projection(eqx.Module):
                                 for j, cols in recipe.rows),
                    b=jnp.asarray(b), P=jnp.asarray(P), PAtb=jnp.asarray(PAtb),
                    floor=jnp.asarray(float(b.reshape(-1) @ b.reshape(-1) - Atb @ PAtb)),
-                   rows=jnp.asarray(float(mask.sum() * model.robot.n_joints)), recipe=recipe)
+                   rows=jnp.asarray(float(mask.sum() * model.robot.n_joints)),
+                   read=tuple(jnp.asarray(np.asarray(getattr(model.terms[i], field),
+                                                     dtype=float))
+                              for i, field in recipe.read), recipe=recipe)
 
     def moving(self, u: Float[Array, " k"]) -> Float[Array, "T K"]:
         """The moved columns at ``u``, on their pairs' rows, weighted and masked."""
         r = self.recipe
-        model = r.model.with_nonlinear(jnp.exp(u))
+        model = r.with_read(self.read).with_nonlinear(jnp.exp(u))
         n = model.robot.n_joints
         coulomb, _ = model.coulomb(self.qd)
         s = Signals(self.q, self.qd, self.qdd, self.recording, coulomb, self.rigid,
@@ -328,5 +346,8 @@ def _recipe(model: TorqueModel, moved: np.ndarray, nonzero: np.ndarray) -> Recip
     on_row = np.any(nonzero[:, :, fixed(model, moved)], axis=0)  # (n, unmoved columns)
     rows = tuple((j, tuple(int(c) for c in np.flatnonzero(on_row[j])))
                  for j in range(model.robot.n_joints))
-    return Recipe(model, coulomb, tuple(terms), tuple(pair_column), tuple(pair_joint),
-                  int(moved.sum()), rows)
+    read = tuple((i, field) for i in terms for field in model.terms[i].read_fields
+                 if getattr(model.terms[i], field) is not None)
+    recipe = Recipe(model, coulomb, tuple(terms), tuple(pair_column), tuple(pair_joint),
+                    int(moved.sum()), rows, read)
+    return dataclasses.replace(recipe, model=recipe.with_read((None,) * len(read)))

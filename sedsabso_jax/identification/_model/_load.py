@@ -34,6 +34,7 @@ class LoadFriction(AbstractTerm):
     load_point: tuple[float, ...] | None = eqx.field(default=None, converter=as_floats)
     name: ClassVar[str] = "load"
     nonnegative: ClassVar[bool] = True
+    read_fields: ClassVar[tuple[str, ...]] = ("load_point",)
     #: The command line's options, ``load:viscous,fixed-point``.
     options: ClassVar[tuple[str, ...]] = ("viscous", "fixed-point")
 
@@ -95,8 +96,8 @@ class LoadFriction(AbstractTerm):
         n = model.robot.n_joints
         if self.load_point is None and s.probe is None:  # not fitted: the robot's own
             point = model.rigid_values(model.prior_values)
-        else:
-            point = np.asarray(self.load_point)
+        else:  # floats, or a search's traced values
+            point = self.load_point
         load = jnp.abs(s.rigid_torque(point))
         out = [diagonal(load * s.coulomb, n)]
         if self.viscous:

@@ -28,7 +28,7 @@ these answers.
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 import abc
 import dataclasses
-from typing import Any, Protocol
+from typing import Any, ClassVar, Protocol
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -157,6 +157,10 @@ class AbstractTerm(eqx.Module):
 
     name: eqx.AbstractClassVar[str]
     nonnegative: eqx.AbstractClassVar[bool]
+    #: The fields holding values read of a fit (not the term's structure), None until
+    #: read: a search takes them as its compiled call's arguments, so that one
+    #: compilation serves the fits of every split (:class:`~.._fit._projection.Projection`).
+    read_fields: ClassVar[tuple[str, ...]] = ()
 
     @abc.abstractmethod
     def names(self, model: ModelView) -> tuple[str, ...]:
