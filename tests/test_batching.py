@@ -85,12 +85,35 @@ def test_nearby_lengths_share_one_compilation(rng):
 
 
 def test_padded_lengths():
-    """At most an eighth more samples, exact up to 15, eight lengths per doubling."""
+    """At most an eighth more samples, exact up to 15, eight lengths per doubling; a
+    multiple of the chunk where one is asked, at most a chunk more."""
     for samples in range(5000):
         padded = padded_samples(samples)
         assert samples <= padded <= samples + samples // 8 + (samples > 15)
         assert samples > 15 or padded == samples
+        for chunk in (8, 16, 1000):
+            assert padded_samples(samples, chunk) % chunk == 0
+            assert padded <= padded_samples(samples, chunk) < padded + chunk
     assert len({padded_samples(s) for s in range(1025, 2049)}) == 8
+
+
+def test_base_parameters_and_a_models_columns_share_one_program():
+    """The base parameters' random states and those that find which of a model's extra
+    columns the base spans are one padded length, a multiple of the CPU's chunk: one
+    compilation of the regressor, with no second body for a remainder (each took 3 s of
+    the default identification's compilation for the KUKA LWR4+)."""
+    from sedsabso_jax.identification._model._torque_model import TorqueModel
+
+    # a structure no other test compiles: its programs are this test's alone
+    robot = sj.robots.from_dh([0.3, 0.0, 0.1, 0.0], [0.0, 0.4, 0.3, 0.0],
+                              [np.pi / 2, 0.0, 0.3, -np.pi / 2])
+    before = _regressor_jit._cache_size()
+    base = sj.base_parameters(robot)
+    assert _regressor_jit._cache_size() == before + 1
+    model = TorqueModel(base, (sj.Offset(),))
+    assert model.dim == base.rank + 4
+    assert _regressor_jit._cache_size() == before + 1
+    assert padded_samples(50, 16) == 64 and padded_samples(50, 8) == 56
 
 
 def test_differentiable_in_q(rng):

@@ -277,6 +277,27 @@ def test_a_term_that_reads_a_fit_is_searched_by_one_compilation(plant):
     assert found[0] != pytest.approx(found[1], rel=1e-6)
 
 
+def test_a_single_trial_and_a_pair_are_one_compiled_call(plant):
+    """A search evaluates single trials (its start, a step) and pairs (a sweep's
+    candidates) besides its grids: a single trial is evaluated beside a copy of itself,
+    so that the two sizes are one compilation (about 1.5 s each for the KUKA LWR4+),
+    and its loss is the pair's first."""
+    from sedsabso_jax.identification._search._problem import _population, losses
+
+    robot, base, data, _ = plant
+    # a length no other test's problem has: its compilations are this test's alone
+    samples = Samples(*(x[:-7] for x in (data.q, data.qd, data.qdd, data.tau)))
+    model = sj.TorqueModel.of(robot, (sj.Presliding(fitted=True),), base=base)
+    problem = Projection.of(model, samples, np.ones(3))
+    u = np.log([0.002, 0.004, 0.001])
+    pair = losses(problem, np.stack([u, u + 0.5]))
+    compiled = _population._cached._cache_size()
+    single = losses(problem, u[None])
+    assert _population._cached._cache_size() == compiled
+    assert single.shape == (1,) and single[0] == pytest.approx(pair[0], rel=1e-12)
+    assert pair[1] != pytest.approx(pair[0], rel=1e-6)
+
+
 def test_a_search_is_kept_per_row_weights(plant):
     """A validation fits each split with several estimators: their searches are one where
     the search weighs the rows alike (OLS, Gautier's WLS: equal), another where it weighs

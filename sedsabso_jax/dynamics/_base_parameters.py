@@ -22,7 +22,6 @@ from jax.typing import DTypeLike
 from jaxtyping import Array, ArrayLike, Float
 
 from ._regressor import padded_regressor, take
-from ._regressor import regressor as _full_regressor
 from ._robot import LINK_PARAMETERS, N_LINK_PARAMETERS, Robot
 
 #: A unit-norm column whose distance to the span of the others is below this is dependent.
@@ -128,7 +127,9 @@ def base_parameters(robot: Robot, *, n_samples: int | None = None, seed: int = 0
     p = robot.n_params
     if n_samples is None:
         n_samples = max(50, -(-4 * p // robot.n_joints))
-    W = np.asarray(_full_regressor(robot, *random_states(robot, n_samples, seed))).reshape(-1, p)
+    # the padded program: the one the base regressor of a model's terms is taken from
+    Y, _ = padded_regressor(robot, *random_states(robot, n_samples, seed))
+    W = np.asarray(Y)[:n_samples].reshape(-1, p)
     norms = np.linalg.norm(W, axis=0)
     nonzero = norms > tol * max(norms.max(), 1.0)
     Ws = W[:, nonzero] / norms[nonzero]

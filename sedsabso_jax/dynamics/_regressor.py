@@ -153,14 +153,16 @@ def _regressor_jit(robot, q, qd, qdd, dtype, chunk=None):
     return _chunked(robot, q.astype(dtype), qd.astype(dtype), qdd.astype(dtype), chunk)
 
 
-def padded_samples(samples: int) -> int:
+def padded_samples(samples: int, multiple: int = 1) -> int:
     """The number of samples :func:`padded_regressor` computes: ``samples`` rounded up to
-    one of eight lengths per doubling (at most an eighth more; up to 15 samples exactly).
-    Recordings of nearby lengths (a validation's outer splits, recordings of one motion)
-    then share one compilation, which takes seconds and hundreds of memory maps; each
-    sample's row is computed alone, so the padding (zeros) changes no row."""
+    one of eight lengths per doubling (at most an eighth more; up to 15 samples exactly),
+    then to a multiple of ``multiple`` (the ``lax.map`` chunk, whose remainder would
+    compile a second body and double the compilation's time). Recordings of nearby lengths (a validation's
+    outer splits, recordings of one motion) then share one compilation, which takes
+    seconds and hundreds of memory maps; each sample's row is computed alone, so the
+    padding (zeros) changes no row."""
     step = 1 << max(0, samples.bit_length() - 4)
-    return -(-samples // step) * step
+    return -(-(-(-samples // step) * step) // multiple) * multiple
 
 
 @partial(jax.jit, static_argnames="padded")
@@ -169,10 +171,14 @@ def _flat_padded(q, qd, qdd, padded: int):
                                                  (0, 0))) for x in (q, qd, qdd)]
 
 
+def _chunk(robot: Robot, samples: int, dtype, memory_budget) -> int | None:
+    return chunk_size(robot.n_joints, samples, itemsize=jnp.dtype(dtype).itemsize,
+                      memory_budget=memory_budget)
+
+
 def _compiled(robot: Robot, q, qd, qdd, dtype, memory_budget, padded: int) -> Array:
     """:func:`_regressor_jit` at ``padded`` samples (flattened where more than given)."""
-    chunk = chunk_size(robot.n_joints, padded, itemsize=jnp.dtype(dtype).itemsize,
-                       memory_budget=memory_budget)
+    chunk = _chunk(robot, padded, dtype, memory_budget)
     if padded > math.prod(q.shape[:-1]):
         q, qd, qdd = _flat_padded(q, qd, qdd, padded)
     return _regressor_jit(robot, q, qd, qdd, jnp.dtype(dtype), chunk)
@@ -190,7 +196,8 @@ def padded_regressor(robot: Robot, q: Float[ArrayLike, "*batch n"],
     q, qd, qdd = joint_arrays(robot, ("q", q), ("qd", qd), ("qdd", qdd), dtype=dtype)
     batch = q.shape[:-1]
     samples = math.prod(batch)
-    padded = samples if isinstance(q, jax.core.Tracer) else padded_samples(samples)
+    padded = samples if isinstance(q, jax.core.Tracer) else padded_samples(
+        samples, _chunk(robot, samples, dtype, memory_budget) or 1)
     Y = _compiled(robot, q, qd, qdd, dtype, memory_budget, padded)
     return Y.reshape((-1,) + Y.shape[-2:]), batch
 

@@ -48,11 +48,20 @@ _population = eqx.filter_jit(jax.vmap(fitness, (0, None)))
 COMPILED = threading.RLock()
 
 
+#: The fewest members a population is evaluated with: a single trial (a search's start,
+#: a step) is evaluated beside a copy of itself, so that it and a pair of trials share
+#: one compilation (seconds each; a pair costs what one does).
+SMALLEST = 2
+
+
 def losses(problem: SearchProblem, U: Float[np.ndarray, "p k"]) -> Float[np.ndarray, " p"]:
     """The losses of the population ``U`` (one row per member), in one vmapped call
-    (:data:`COMPILED`)."""
+    (:data:`COMPILED`; at least :data:`SMALLEST` members)."""
+    U = np.asarray(U, dtype=float)
+    padded = np.concatenate([U, np.repeat(U[:1], SMALLEST - len(U), 0)]) if len(
+        U) < SMALLEST else U
     with COMPILED:
-        return np.asarray(_population(np.asarray(U, dtype=float), problem))
+        return np.asarray(_population(padded, problem))[:len(U)]
 
 
 def on_bounds(u: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
