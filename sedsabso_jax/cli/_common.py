@@ -119,14 +119,16 @@ def duration(seconds: float) -> str:
 
 class LineProgress(Progress):
     """``progress(label, done, total)`` of a long call whose ``done`` and ``total`` are
-    work (estimated seconds, not a count), followed by ``then`` estimated seconds of the
-    command's own (writing the results; :meth:`finish` when done). On a terminal a bar of
-    the share done; elsewhere (a log file, a pipe, CI) a line each time another ``every``
-    of the work is done (0: at every call) and at its end, with the seconds so far and the
-    time left at the pace so far. The pace is measured from the first call, once
-    :data:`PACE_SHARE` of the work is done since: what comes before it (imports,
-    compilation, the first regressor) is not the pace of the rest, nor is one small step.
-    ``total`` may change between calls (the work ahead estimated again)."""
+    work (estimated seconds, not a count), followed by ``then`` seconds of the command's
+    own (writing the results; :meth:`finish` when done). On a terminal a bar of the share
+    done; elsewhere (a log file, a pipe, CI) a line each time another ``every`` of the
+    work is done (0: at every call) and at its end, with the seconds so far and the time
+    left: the pace so far applied to the call's work left, then ``then`` as it is (the
+    pace of fits whose compilation a warm cache skips is not the pace of drawing
+    figures). The pace is measured from the first call, once :data:`PACE_SHARE` of the
+    work is done since: what comes before it (imports, compilation, the first regressor)
+    is not the pace of the rest, nor is one small step. ``total`` may change between
+    calls (the work ahead estimated again)."""
 
     bar_format = "{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}, {postfix}"
 
@@ -154,7 +156,7 @@ class LineProgress(Progress):
         start, done0 = self.first
         left = None
         if share < 1.0 and done - done0 >= PACE_SHARE * self.total and now > start:
-            left = (now - start) / (done - done0) * (self.total - done)
+            left = (now - start) / (done - done0) * max(total - done, 0.0) + self.then
         print(self.line(share, now - self.start, left, label), file=self.stream, flush=True)
 
     def line(self, share: float, elapsed: float, left: float | None, label: str) -> str:

@@ -37,10 +37,10 @@ from ._loading import (
 from ._vocabulary import AUTO
 
 WEIGHTS = (AUTO, "residual", "limits", "equal")
-#: The estimated seconds (as the library's, sedsabso_jax/identification/_work.py) of
-#: writing the report: its text and JSON, and with --out matplotlib's import and each
-#: figure.
-WRITE_SECONDS, PYPLOT_SECONDS, FIGURE_SECONDS = 0.3, 1.5, 1.2
+#: The seconds of writing the report (on 2 cores; not paced as the library's estimates,
+#: :class:`~._common.LineProgress`): its text and JSON, and with --out matplotlib's
+#: import and each figure (2.0 s and 1.3-1.6 s measured for the KUKA LWR4+'s).
+WRITE_SECONDS, PYPLOT_SECONDS, FIGURE_SECONDS = 0.3, 2.0, 1.5
 
 
 def writing_seconds(figures: int) -> float:
