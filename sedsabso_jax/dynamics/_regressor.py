@@ -157,10 +157,10 @@ def padded_samples(samples: int, multiple: int = 1) -> int:
     """The number of samples :func:`padded_regressor` computes: ``samples`` rounded up to
     one of eight lengths per doubling (at most an eighth more; up to 15 samples exactly),
     then to a multiple of ``multiple`` (the ``lax.map`` chunk, whose remainder would
-    compile a second body and double the compilation's time). Recordings of nearby lengths (a validation's
-    outer splits, recordings of one motion) then share one compilation, which takes
-    seconds and hundreds of memory maps; each sample's row is computed alone, so the
-    padding (zeros) changes no row."""
+    compile a second body and double the compilation's time). Recordings of nearby
+    lengths (a validation's outer splits, recordings of one motion) then share one
+    compilation, which takes seconds and hundreds of memory maps; each sample's row is
+    computed alone, so the padding (zeros) changes no row."""
     step = 1 << max(0, samples.bit_length() - 4)
     return -(-(-(-samples // step) * step) // multiple) * multiple
 
