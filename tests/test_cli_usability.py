@@ -5,6 +5,7 @@ examples, exit statuses (2 bad input, 1 a failure while running), ``base-paramet
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import re
@@ -313,6 +314,24 @@ def test_model_choice_and_prior_report_their_work(data_file):
     assert all("kept unless worse" in label for label in labels[24:30])
     assert kept.min() > 3 * grid.max() and steps[-2] > kept.max()
     assert done == sorted(done) and done[-1] == calls[-1][2]
+
+
+def test_a_fit_with_its_searched_values_held_weighs_no_search():
+    """A signal chain's validation holds the model's searched values where a fit to all
+    the data put them: its fits are estimated as least squares, not as searches (they
+    were, and the KUKA's progress said ~15 s left for 6 s)."""
+    from sedsabso_jax.identification import _work
+    from sedsabso_jax.identification._search._methods import Held
+
+    robot = sj.robots.rs010n()
+    searched = sj.TorqueModel.of(robot, (sj.Presliding(fitted=True),))
+    held = dataclasses.replace(searched, search=Held())
+    plain = sj.TorqueModel.of(robot, (sj.Presliding(),))
+    rows = 3 * 3000
+    assert _work.fit_seconds(sj.OLS(), held, rows) == _work.fit_seconds(sj.OLS(), plain, rows)
+    assert _work.fit_seconds(sj.OLS(), searched, rows) > 5 * _work.fit_seconds(
+        sj.OLS(), held, rows)
+    assert _work.parts(sj.OLS(), held) == frozenset() != _work.parts(sj.OLS(), searched)
 
 
 def test_config_of_reproduce_and_compare(tmp_path):

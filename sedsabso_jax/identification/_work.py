@@ -10,12 +10,13 @@ seconds of the machine they were measured on; a caller's time left is the pace i
 measures applied to the work left (``sedsabso-jax identify``'s). A fit's estimate grows
 with its rows ``R`` (samples x joints) and columns ``d``: least squares ``R d^2``, a
 physically consistent fit's conic solve ``d^3``, a term that reads the fitted values (a
-fixed point of fits) ``R d``, a search of ``k`` nonlinear parameters ``R d k``; a part's
-first fit in a call sets it up once (:data:`SETUP`: the conic solver's import, the
-search's compilation), and the fit on all the data searches again at new shapes and
-measures the searched parameters' uncertainty (:data:`FINAL_SEARCH`,
-:data:`FINAL_SETUP`). Another search method or budget than the default's changes a
-search's cost, and so the share of the work it is given (not the pace)."""
+fixed point of fits) ``R d``, a search of ``k`` nonlinear parameters ``R d k`` (none
+where they are held); a part's first fit in a call sets it up once (:data:`SETUP`: the
+conic solver's import, the search's compilation), and the fit on all the data searches
+again at new shapes and measures the searched parameters' uncertainty
+(:data:`FINAL_SEARCH`, :data:`FINAL_SETUP`). Another search method or budget than the
+default's changes a search's cost, and so the share of the work it is given (not the
+pace)."""
 
 from __future__ import annotations
 
@@ -46,7 +47,8 @@ EVALUATE = 5.0e-8
 
 def parts(estimator: Estimator, model: TorqueModel) -> frozenset[str]:
     """The parts of :data:`SETUP` a fit of ``model`` with ``estimator`` has."""
-    return frozenset(("conic",) * estimator.physical + ("search",) * bool(model.nonlinear()))
+    searched = bool(model.nonlinear()) and (model.search is None or model.search.searches)
+    return frozenset(("conic",) * estimator.physical + ("search",) * searched)
 
 
 def fit_seconds(estimator: Estimator, model: TorqueModel, rows: int, *,
@@ -62,7 +64,8 @@ def fit_seconds(estimator: Estimator, model: TorqueModel, rows: int, *,
         seconds *= COSTLY
     if model.waiting or model.iterates:
         seconds += FIXED_POINT * rows * d + FIXED_POINT_FIT
-    k = sum(len(found.values) for _, found in model.nonlinear())
+    searched = model.search is None or model.search.searches  # not held where they are
+    k = sum(len(found.values) for _, found in model.nonlinear()) if searched else 0
     if k:
         seconds += (SEARCH * rows * d * k + SEARCH_FIT) * (FINAL_SEARCH if final else 1.0)
         seconds += FINAL_SETUP if final else 0.0

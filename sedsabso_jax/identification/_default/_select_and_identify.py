@@ -29,6 +29,7 @@ from .._model._checks import model_of
 from .._model._torque_model import TorqueModel
 from .._options import one_or_more
 from .._recordings import Data, recordings_of
+from .._search._methods import Held
 from .._validation._progress import Fits
 from .._validation._selection import choose_prior_strength, revalidated, select_model
 from .._validation._splits import Validation
@@ -41,11 +42,14 @@ from ._signals import choose_chain
 
 
 def _work_after(estimators: Iterable[Estimator], models: Iterable[TorqueModel], rows: int,
-                held_rows: int, fits: int) -> float:
+                held_rows: int, fits: int, held_fits: int = 0) -> float:
     """The estimated seconds after the model choice, for the costliest of ``estimators``
-    and ``models``: ``fits`` fits of the validations after it (the signal chains', the
-    prior's), the fit on all ``rows`` and the report's evaluation (with ``held_rows``)."""
-    return max(fits * fit_seconds(e, m, rows) + fit_seconds(e, m, rows, final=True)
+    and ``models``: ``fits`` fits of the validations after it (the prior's), ``held_fits``
+    with the searched values held (the signal chains'), the fit on all ``rows`` and the
+    report's evaluation (with ``held_rows``)."""
+    return max(fits * fit_seconds(e, m, rows)
+               + held_fits * fit_seconds(e, dataclasses.replace(m, search=Held()), rows)
+               + fit_seconds(e, m, rows, final=True)
                + evaluate_seconds(m, rows + held_rows) for e in estimators for m in models)
 
 
@@ -143,10 +147,12 @@ def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: 
     splits = (len(chosen_by.splits(recordings))
               if progress is not None and chosen_by is not None else 0)
     prior_fits = len(DEFAULT.prior_strengths) * splits if choice.prior_strength == "cv" else 0
-    chain_fits = (len(chains) + delay) * splits  # an estimate: each on all the rows
+    # an estimate, each on all the rows: the chains' validations (the searched values
+    # held), and a chosen chain's own (searched)
+    chain_fits, revalidation = (len(chains) + delay) * splits, splits * bool(chains)
     fits = Fits(progress, _work_after(
         estimators, models + (() if kept is None else kept.models(models[-1])), rows,
-        held_rows, prior_fits + chain_fits) if progress is not None else 0.0)
+        held_rows, prior_fits + revalidation, chain_fits) if progress is not None else 0.0)
     selection = cv = signals = None
     # the samples of all the data: the final fit reuses the chain's search of the model
     samples = recorded(robot, recordings)[1]
