@@ -176,9 +176,9 @@ def _chunk(robot: Robot, samples: int, dtype, memory_budget) -> int | None:
                       memory_budget=memory_budget)
 
 
-def _compiled(robot: Robot, q, qd, qdd, dtype, memory_budget, padded: int) -> Array:
-    """:func:`_regressor_jit` at ``padded`` samples (flattened where more than given)."""
-    chunk = _chunk(robot, padded, dtype, memory_budget)
+def _compiled(robot: Robot, q, qd, qdd, dtype, chunk: int | None, padded: int) -> Array:
+    """:func:`_regressor_jit` at ``padded`` samples (flattened where more than given) in
+    ``chunk``s (:func:`_chunk`)."""
     if padded > math.prod(q.shape[:-1]):
         q, qd, qdd = _flat_padded(q, qd, qdd, padded)
     return _regressor_jit(robot, q, qd, qdd, jnp.dtype(dtype), chunk)
@@ -196,9 +196,12 @@ def padded_regressor(robot: Robot, q: Float[ArrayLike, "*batch n"],
     q, qd, qdd = joint_arrays(robot, ("q", q), ("qd", qd), ("qdd", qdd), dtype=dtype)
     batch = q.shape[:-1]
     samples = math.prod(batch)
-    padded = samples if isinstance(q, jax.core.Tracer) else padded_samples(
-        samples, _chunk(robot, samples, dtype, memory_budget) or 1)
-    Y = _compiled(robot, q, qd, qdd, dtype, memory_budget, padded)
+    if isinstance(q, jax.core.Tracer):
+        padded, chunk = samples, _chunk(robot, samples, dtype, memory_budget)
+    else:  # the chunk of the rounded length, then a multiple of it
+        chunk = _chunk(robot, padded_samples(samples), dtype, memory_budget)
+        padded = padded_samples(samples, chunk or 1)
+    Y = _compiled(robot, q, qd, qdd, dtype, chunk, padded)
     return Y.reshape((-1,) + Y.shape[-2:]), batch
 
 
@@ -225,7 +228,8 @@ def regressor(robot: Robot, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike
     check_memory_budget(memory_budget)
     q, qd, qdd = joint_arrays(robot, ("q", q), ("qd", qd), ("qdd", qdd), dtype=dtype)
     samples = math.prod(q.shape[:-1])
-    return _compiled(robot, q, qd, qdd, dtype, memory_budget, samples)
+    return _compiled(robot, q, qd, qdd, dtype, _chunk(robot, samples, dtype, memory_budget),
+                     samples)
 
 
 def inverse_dynamics(robot: Robot, params: Float[ArrayLike, " p"],
@@ -243,5 +247,7 @@ def inverse_dynamics(robot: Robot, params: Float[ArrayLike, " p"],
             f"(12 per joint), got {params.shape}"
         )
     # Reuses the regressor's compiled code: one compilation serves both functions.
-    Y = _compiled(robot, q, qd, qdd, jnp.float64, memory_budget, math.prod(q.shape[:-1]))
+    samples = math.prod(q.shape[:-1])
+    Y = _compiled(robot, q, qd, qdd, jnp.float64,
+                  _chunk(robot, samples, jnp.float64, memory_budget), samples)
     return jnp.matmul(Y, params, precision=jax.lax.Precision.HIGHEST)
