@@ -55,6 +55,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--robots", default=",".join(ROBOTS))
     robots = parser.parse_args().robots.split(",")
+    if unknown := sorted(set(robots) - set(ROBOTS)):
+        parser.error(f"--robots: unknown {', '.join(unknown)}; expected words of "
+                     f"{', '.join(ROBOTS)}")
     warnings.simplefilter("ignore")
     for name, robot, data, limits, tr, _ in datasets(Path(tempfile.mkdtemp()), robots):
         tau_limits = limits.torque_limits
