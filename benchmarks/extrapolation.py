@@ -214,6 +214,22 @@ class Plant:
                                qdd_derived[keep], tau[keep], source=f"speed {speed}")
 
 
+def new_motions(plant: Plant, designs, others) -> dict:
+    """The plant's new motions, ``{(kind, t): recording}`` for each of :data:`MOTIONS` and
+    each trajectory ``designs[t]`` of ``others``: played at each of :data:`SPEEDS`, and
+    made into motions that rest."""
+    p = plant.seed
+    new = {(f"{s:g}x", t): plant.record(designs[t], s, seed=1 + 10 * t + int(10 * s))
+           for t in others for s in SPEEDS}
+    new.update({("p2p", t): plant.record(PointToPoint(designs[t], seed=p), 1.0,
+                                         seed=5 + 10 * t) for t in others})
+    new.update({("pick", t): plant.record(pick_and_place(designs[t], seed=p), 1.0,
+                                          seed=6 + 10 * t) for t in others})
+    new.update({("reversals", t): plant.record(SlowReversals(designs[t], seed=p), 1.0,
+                                               seed=7 + 10 * t) for t in others})
+    return new
+
+
 def _nrms(fit: sj.Identification, m: sj.Measurements, tau_max: np.ndarray) -> float:
     predicted = fit.predict(m.q, m.qd, m.qdd)
     return float(sj.validation_metrics(m.tau, predicted, tau_max).nrms_limits_percent)
@@ -253,14 +269,7 @@ def study(plants: int, loto: bool = False, only: list[int] | None = None,
         plant = Plant(robot, tau_max, seed=p)
         data = plant.record(designs[p], 1.0, seed=0)
         others = range(plants, plants + 3)
-        new = {(f"{s:g}x", t): plant.record(designs[t], s, seed=1 + 10 * t + int(10 * s))
-               for t in others for s in SPEEDS}
-        new.update({("p2p", t): plant.record(PointToPoint(designs[t], seed=p), 1.0,
-                                             seed=5 + 10 * t) for t in others})
-        new.update({("pick", t): plant.record(pick_and_place(designs[t], seed=p), 1.0,
-                                              seed=6 + 10 * t) for t in others})
-        new.update({("reversals", t): plant.record(SlowReversals(designs[t], seed=p), 1.0,
-                                                   seed=7 + 10 * t) for t in others})
+        new = new_motions(plant, designs, others)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             # the default's validation, whose parts are the phase folds and speed splits

@@ -310,6 +310,8 @@ def test_an_unwritable_output_is_found_before_the_work(rs010n_run, tmp_path, cap
 @pytest.mark.parametrize("flags, words", [
     (["--friction", "viscous-coulomb", "--no-friction-at-rest"],
      ["--no-friction-at-rest acts on --friction auto only"]),
+    (["--friction", "smooth", "--no-searched-scales"],
+     ["--no-searched-scales acts on --friction auto only", "smooth:fit"]),
     (["--folds", "0", "--validation", "speed"],
      ["--folds 0 turns validation off: --validation speed"]),
     (["--folds", "3", "--validation", "recordings"],

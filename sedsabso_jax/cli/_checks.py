@@ -32,6 +32,10 @@ def refuse_contradictions(args: argparse.Namespace) -> None:
         raise ValueError(f"--no-friction-at-rest acts on --friction auto only: --friction "
                          f"{args.friction} is fitted as given (leave out presliding to fit "
                          f"no friction at rest)")
+    if not args.searched_scales and args.friction != "auto":
+        raise ValueError(f"--no-searched-scales acts on --friction auto only: --friction "
+                         f"{args.friction} is fitted as given (smooth:fit searches the "
+                         f"scales, smooth keeps them at 0.02 rad/s)")
     if args.folds == 0 and args.validation != "pooled":
         raise ValueError(f"--folds 0 turns validation off: --validation {args.validation} "
                          f"would not be used")

@@ -68,14 +68,16 @@ def _choice(args: argparse.Namespace, physical: bool | None, candidates: int) ->
     checked, named by the flags), before any data are loaded."""
     from ..identification._default._choice import Choice, DefaultValidation
     from ..identification._validation._kept_terms import KEPT_TERMS
+    from ..identification._validation._screened_terms import SCREENED_TERMS
     from ..identification._validation._splits import PhaseFolds, RecordingFolds, SpeedSplits
 
     validation: Any = None  # --folds 0: none
     if args.folds != 0 and args.validation == "pooled":
-        validation = DefaultValidation(args.folds, None if args.friction != AUTO
-                                       or not args.friction_at_rest or args.mujoco_terms
-                                       else KEPT_TERMS,
-                                       signals=AUTO if args.signals == "auto" else None)
+        auto = args.friction == AUTO and not args.mujoco_terms
+        validation = DefaultValidation(
+            args.folds, KEPT_TERMS if auto and args.friction_at_rest else None,
+            SCREENED_TERMS if auto and args.searched_scales else None,
+            signals=AUTO if args.signals == "auto" else None)
     elif args.folds != 0 and args.validation == "phase":
         validation = PhaseFolds(args.folds)
     elif args.folds != 0:
@@ -226,10 +228,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        "load:viscous adds viscous friction growing with the load); auto "
                        f"(default): chosen by validation among {candidates}, then "
                        "friction at rest (presliding:fit:0.02) added and kept unless it "
-                       "validates worse")
+                       "validates worse, then the smooth Coulomb's velocity scales "
+                       "(smooth:fit) searched where they validate better")
     model.add_argument("--no-friction-at-rest", dest="friction_at_rest",
                        action="store_false",
                        help="with --friction auto, do not add friction at rest to the choice")
+    model.add_argument("--no-searched-scales", dest="searched_scales", action="store_false",
+                       help="with --friction auto, do not search the smooth Coulomb's "
+                       "velocity scales (kept at 0.02 rad/s)")
     est = ip.add_argument_group("estimator")
     est.add_argument("--method", choices=(AUTO, *ESTIMATORS), default=AUTO,
                      help="estimator; auto (default): OLS or WLS, chosen by validation")

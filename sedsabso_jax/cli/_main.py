@@ -154,6 +154,7 @@ def _enable_compilation_cache() -> str | None:
     except OSError:  # read-only home: run without the cache
         return None
     jax.config.update("jax_compilation_cache_dir", where)
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     return where
 
 

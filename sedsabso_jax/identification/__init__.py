@@ -104,6 +104,8 @@ from ._validation._phase import phase_folds as phase_folds
 from ._validation._phase import repeat_period as repeat_period
 from ._validation._rests import Rests as Rests
 from ._validation._rests import rests as rests
+from ._validation._screened_terms import SCREENED_TERMS as SCREENED_TERMS
+from ._validation._screened_terms import ScreenedTerms as ScreenedTerms
 from ._validation._selection import ESTIMATOR_CANDIDATES as ESTIMATOR_CANDIDATES
 from ._validation._selection import PRIOR_STRENGTHS as PRIOR_STRENGTHS
 from ._validation._selection import PriorSelection as PriorSelection
@@ -123,7 +125,8 @@ __all__ = [
     "PAYLOAD_PARAMETERS", "Projection", "AbstractSearch", "CoordinateSearch", "Held",
     "PopulationSearch", "LeastSquaresSearch", "dahl_state", "increments", "GAIN_METHODS",
     "AbstractGainMethod", "LikelihoodGains", "TotalGains", "OrdinaryGains", "PhysicalGains",
-    "CALIBRATED_STD", "KeptTerms", "KEPT_TERMS", "rests", "Rests", "HeldOut", "mean_metrics",
+    "CALIBRATED_STD", "KeptTerms", "KEPT_TERMS", "ScreenedTerms", "SCREENED_TERMS", "rests",
+    "Rests", "HeldOut", "mean_metrics",
     "InSimulator", "Simulated", "simulated", "held_frictions", "mujoco_torques",
     "SimulatorCheck", "rollout_errors", "RolloutErrors", "OutputError", "Refined", "refine",
     "estimate_delay", "DelayEstimate", "LARGEST_DELAY_S",

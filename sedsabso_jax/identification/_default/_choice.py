@@ -17,6 +17,7 @@ from .._estimators._estimator import Estimator, Sigma
 from .._estimators._least_squares import PhysicallyConsistent
 from .._options import as_float, as_int, check_count
 from .._validation._kept_terms import KEPT_TERMS, KeptTerms
+from .._validation._screened_terms import SCREENED_TERMS, ScreenedTerms
 from .._validation._splits import PhaseFolds, Pooled, RecordingFolds, SpeedSplits, Validation
 from ._policy import AUTO, DEFAULT
 
@@ -49,8 +50,11 @@ class DefaultValidation(eqx.Module):
     ``kept`` (:class:`~sedsabso_jax.identification.KeptTerms`, default
     :data:`~sedsabso_jax.identification.KEPT_TERMS`: friction at rest with its
     displacements searched; None: nothing) added to the choice and kept unless it
-    validates worse. After them, ``signals``: the signal chains chosen among
-    (:func:`~._signals.choose_chain`; :data:`AUTO`, the default:
+    validates worse, and then ``screened``
+    (:class:`~sedsabso_jax.identification.ScreenedTerms`, default
+    :data:`~sedsabso_jax.identification.SCREENED_TERMS`: the smooth Coulomb's scales;
+    None: nothing) searched where they validate better. After them, ``signals``: the
+    signal chains chosen among (:func:`~._signals.choose_chain`; :data:`AUTO`, the default:
     :meth:`~._policy.Default.chains` and the torques' delay, where every recording keeps
     its recorded signals and was loaded without choosing a chain, else none; None: none,
     the signals as given; one :class:`~sedsabso_jax.measurements.SignalChain` or
@@ -58,6 +62,7 @@ class DefaultValidation(eqx.Module):
 
     folds: int = eqx.field(default=DEFAULT.folds, converter=as_int)
     kept: KeptTerms | None = KEPT_TERMS
+    screened: ScreenedTerms | None = SCREENED_TERMS
     interpolation: Validation | None = None
     signals: Any = eqx.field(default=AUTO, converter=_signals)
     kind: ClassVar[str] = "default"
@@ -67,6 +72,9 @@ class DefaultValidation(eqx.Module):
         check_count("folds", self.folds, 2)
         if self.kept is not None and not isinstance(self.kept, KeptTerms):
             raise TypeError(f"kept must be KeptTerms(...) or None, got {self.kept!r}")
+        if self.screened is not None and not isinstance(self.screened, ScreenedTerms):
+            raise TypeError(f"screened must be ScreenedTerms(...) or None, got "
+                            f"{self.screened!r}")
         if self.interpolation is not None and not isinstance(self.interpolation, Validation):
             raise TypeError(f"interpolation must be a Validation (PhaseFolds(), "
                             f"GivenFolds(labels), ...) or None, got {self.interpolation!r}")

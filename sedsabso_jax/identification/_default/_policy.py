@@ -19,10 +19,11 @@ from .._estimators._estimator import Estimator, Sigma
 from .._estimators._least_squares import OLS, WLS
 from .._fit._delay import LARGEST_DELAY_S
 from .._model._actuators import Armature
-from .._model._friction import SmoothCoulomb
+from .._model._friction import SMOOTH_VELOCITY, SmoothCoulomb
 from .._model._load import LoadFriction
 from .._model._offset import Offset
 from .._model._presliding import LARGEST_AT_REST, Presliding
+from .._model._scales import AbstractScale
 from .._model._term import AbstractTerm
 
 #: ``method`` and ``sigma`` (``--method``, ``--weights``, ``--friction``) left to
@@ -43,7 +44,9 @@ class Default(eqx.Module):
 
     Kept terms: ``kept_terms``, added to the chosen model and kept unless they validate
     worse (friction at rest, its displacements searched up to ``largest_at_rest``, rad
-    or m).
+    or m). Screened terms: ``screened_terms``, their scales searched in the chosen model
+    where they validate better (the smooth Coulomb's, from ``smallest_smooth`` up, rad/s
+    or m/s).
 
     Splits: ``folds`` phase folds (a lag whose normalised autocorrelation reaches
     ``repeat_correlation`` is a repeat of the motion); speed splits fit below
@@ -69,6 +72,7 @@ class Default(eqx.Module):
     sigmas: tuple[str | None, ...] = (None, "residual", "limits")
     prior_strengths: tuple[float, ...] = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)
     largest_at_rest: float = LARGEST_AT_REST
+    smallest_smooth: float = SMOOTH_VELOCITY
     folds: int = 5
     repeat_correlation: float = 0.95
     fit_below: float = 0.7
@@ -103,6 +107,13 @@ class Default(eqx.Module):
     def kept_terms(self) -> tuple[tuple[AbstractTerm, ...], ...]:
         """The kept terms' alternatives (one: friction at rest, displacements searched)."""
         return ((Presliding(fitted=True, largest=self.largest_at_rest),),)
+
+    @property
+    def screened_terms(self) -> tuple[AbstractScale, ...]:
+        """The terms whose scales are searched where they validate better: the smooth
+        Coulomb's, from ``smallest_smooth`` up (never a sharper jump at rest than the
+        candidates' own)."""
+        return (SmoothCoulomb(fitted=True, smallest=self.smallest_smooth),)
 
     def estimator_candidates(self, method: str | None = None, sigma: Sigma = AUTO,
                              **options: Any) -> tuple[Estimator, ...]:

@@ -280,7 +280,7 @@ class IdentificationReport:
                           ("choice", "`chosen` (the simplest, fewest parameters then "
                            "physically consistent, whose split-by-split excess over the "
                            "lowest is within one standard error) or `lowest` (the lowest "
-                           "error)"))]
+                           "error)")), *(["", sel.screen.line()] if sel.screen else [])]
         if self.prior_selection is not None:
             lines += ["", "pull toward the a-priori parameters chosen by validation (the "
                           "strongest within one standard error of the lowest):", "",

@@ -64,7 +64,8 @@ def select_and_identify(robot: Robot, data: Data, *, held_out: HeldOutData | Non
     (:data:`~._policy.DEFAULT`): choose the estimator and the torque model by validation
     (:func:`~sedsabso_jax.select_model`: the simplest within one standard error of the
     lowest validated error) and the kept terms (added and kept unless they validate
-    worse), then the signal chain (:func:`~._signals.choose_chain`: the velocities and
+    worse) and the screened scales (searched where they validate better), then the
+    signal chain (:func:`~._signals.choose_chain`: the velocities and
     accelerations recorded or derived, the cutoff that derives them, the torques' delay;
     the held-out recordings made by the same chain), then the pull to the prior, fit on
     all of ``data``, and judge the fit on it, on the validation and on each held-out
@@ -139,8 +140,9 @@ def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: 
                          regularized=choice.physical is True  # "cv" may choose none
                          and not isinstance(choice.prior_strength, str)
                          and choice.prior_strength > 0)
-    kept = (choice.validation.kept if isinstance(choice.validation, DefaultValidation)
-            and len(models) > 1 else None)
+    kept, screened = ((choice.validation.kept, choice.validation.screened)
+                      if isinstance(choice.validation, DefaultValidation) and len(models) > 1
+                      else (None, None))
     # the work after the model choice, for the progress: the prior's validation, the fit
     # on all the data, the evaluation; of the costliest candidate until one is chosen
     rows, held_rows = sum(r.q.size for r in recordings), sum(r.q.size for r in held.values())
@@ -161,7 +163,7 @@ def chosen_and_identified(robot: Robot, recordings: list[Measurements], choice: 
     else:
         selection = select_model(robot, recordings, models=models, estimators=estimators,
                                  validation=chosen_by, limits=limits, kept=kept,
-                                 progress=fits)
+                                 screened=screened, progress=fits)
         if chains:
             fits.later = _work_after((selection.estimator,), (selection.model,), rows,
                                      held_rows, prior_fits)

@@ -53,14 +53,32 @@ class Quadratic(AbstractJointFriction):
 class SmoothCoulomb(AbstractScale):
     """Coulomb friction without the jump at rest: ``tanh(qd_j / velocity)`` in place of
     ``sign(qd_j)`` in each joint's Coulomb column (``velocity`` in rad/s or m/s, > 0:
-    one, one per joint, or with ``fitted=True`` one per joint searched by the fit); no
-    columns of its own."""
+    one, one per joint, or with ``fitted=True`` one per joint searched by the fit within
+    its declared bounds, 1e-4 to 1 rad/s, from ``smallest`` up where given:
+    ``smooth:fit:0.02`` in the command line's text); no columns of its own."""
 
     velocity: float | tuple[float, ...] = scale(SMOOTH_VELOCITY, bounds=VELOCITY_BOUNDS,
                                                 unit="rad/s", symbol="v_smooth")
     fitted: bool = False
+    smallest: float | None = None
+    narrowed_by: ClassVar[tuple[str, int] | None] = ("smallest", 0)
     name: ClassVar[str] = "smooth"
     nonnegative: ClassVar[bool] = False
+
+    @classmethod
+    def parse(cls, option: str | None) -> AbstractTerm:
+        if option is None or not option.startswith("fit:"):
+            return super().parse(option)
+        try:
+            smallest = float(option[4:])
+        except ValueError:
+            smallest = float("nan")
+        if not cls._inside(smallest):
+            raise ValueError(f"friction term 'smooth': smooth:fit:SMALLEST searches each "
+                             f"joint's velocity scale from SMALLEST rad/s up, a number in "
+                             f"{cls.interval()}, got smooth:{option} (e.g. "
+                             f"smooth:fit:{SMOOTH_VELOCITY:g})")
+        return cls(fitted=True, smallest=smallest)
 
     def names(self, model: ModelView) -> tuple[str, ...]:
         if None in model.base.joint_columns("FC"):

@@ -43,6 +43,7 @@ class Presliding(AbstractScale):
     fitted: bool = False
     scan: str = "auto"
     largest: float | None = None
+    narrowed_by: ClassVar[tuple[str, int] | None] = ("largest", 1)
     name: ClassVar[str] = "presliding"
     unit: ClassVar[str] = "N m for friction at rest FP (the torque it saturates at)"
 
@@ -58,21 +59,6 @@ class Presliding(AbstractScale):
     def __check_init__(self):  # equinox also runs AbstractScale's
         if self.scan not in SCANS:
             raise ValueError(f"Presliding's scan must be one of {SCANS}, got {self.scan!r}")
-        lo, hi = self.declared().bounds
-        if self.largest is not None and not (
-                self.fitted and isinstance(self.largest, float) and lo < self.largest <= hi):
-            raise ValueError(f"Presliding's largest must be a number in ({lo:g}, "
-                             f"{hi:g}] with fitted=True, got {self.largest!r} "
-                             f"(fitted={self.fitted!r})")
-
-    def search_bounds(self) -> tuple[float, float]:
-        lo, hi = self.declared().bounds
-        return (lo, hi) if self.largest is None else (lo, self.largest)
-
-    @property
-    def text(self) -> str:
-        base = super().text
-        return base if self.largest is None else f"{base}:{self.largest:g}"
 
     @classmethod
     def parse(cls, option: str | None) -> AbstractTerm:
@@ -83,11 +69,10 @@ class Presliding(AbstractScale):
                 raise ValueError(f"friction term 'presliding': expected presliding:fit:LARGEST "
                                  f"(rad, the largest displacement searched), got "
                                  f"presliding:{option}") from None
-            lo, hi = cls.declared().bounds
-            if not lo < largest <= hi:  # NaN too
+            if not cls._inside(largest):
                 raise ValueError(f"friction term 'presliding': presliding:fit:LARGEST searches "
                                  f"each joint's displacement up to LARGEST rad, a number in "
-                                 f"({lo:g}, {hi:g}], got presliding:{option} (e.g. "
+                                 f"{cls.interval()}, got presliding:{option} (e.g. "
                                  f"presliding:fit:{LARGEST_AT_REST:g})")
             return cls(fitted=True, largest=largest)
         return super().parse(option)
@@ -106,6 +91,4 @@ class Presliding(AbstractScale):
 
     def settings(self) -> dict:
         out = super().settings()
-        if self.largest is not None:
-            out["presliding_largest"] = self.largest
         return out if self.scan == "auto" else {**out, "presliding_scan": self.scan}

@@ -6,7 +6,7 @@ the converter and check of a scale given as one number or one per joint."""
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
 import dataclasses
 import functools
-from typing import Any
+from typing import Any, ClassVar
 
 import equinox as eqx
 import jax
@@ -64,6 +64,10 @@ class AbstractScale(AbstractTerm):
     bounds (:meth:`declared`)."""
 
     fitted: eqx.AbstractVar[bool]
+    #: A field that narrows the box a fit searches (None until given, then a number, only
+    #: with ``fitted=True``) and the end it sets, 0 the lower, 1 the upper: the command
+    #: line's ``name:fit:VALUE``; None: the declared box only.
+    narrowed_by: ClassVar[tuple[str, int] | None] = None
 
     @classmethod
     @functools.cache
@@ -87,6 +91,31 @@ class AbstractScale(AbstractTerm):
         if not isinstance(self.fitted, bool):
             raise ValueError(f"{type(self).__name__}'s fitted must be True or False, got "
                              f"{self.fitted!r}")
+        value = self.narrowing
+        if value is not None and not (self.fitted and isinstance(value, float)
+                                      and self._inside(value)):
+            raise ValueError(f"{type(self).__name__}'s {self.narrowed_by[0]} must be a "  # type: ignore[index]
+                             f"number in {self.interval()} with fitted=True, got {value!r} "
+                             f"(fitted={self.fitted!r})")
+
+    @property
+    def narrowing(self) -> float | None:
+        """The value of the field that narrows the searched box (:attr:`narrowed_by`)."""
+        return None if self.narrowed_by is None else getattr(self, self.narrowed_by[0])
+
+    @classmethod
+    def interval(cls) -> str:
+        """Where a narrowing value may lie: inside the declared box, at most its upper end
+        for an upper bound, at least its lower end for a lower one."""
+        lo, hi = cls.declared().bounds
+        upper = cls.narrowed_by is not None and cls.narrowed_by[1] == 1
+        return f"({lo:g}, {hi:g}]" if upper else f"[{lo:g}, {hi:g})"
+
+    @classmethod
+    def _inside(cls, value: float) -> bool:
+        lo, hi = cls.declared().bounds
+        upper = cls.narrowed_by is not None and cls.narrowed_by[1] == 1
+        return lo < value <= hi if upper else lo <= value < hi  # NaN: False
 
     def check_joints(self, n: int) -> None:
         """A ValueError unless the scale is one number or one per joint of ``n``."""
@@ -100,16 +129,25 @@ class AbstractScale(AbstractTerm):
         self.check_joints(n)
         return jnp.broadcast_to(jnp.asarray(self.scale, dtype=float), (n,))
 
+    def fixed(self) -> "AbstractScale":
+        """The term with its scale fixed where it is (not searched)."""
+        narrowing = {} if self.narrowed_by is None else {self.narrowed_by[0]: None}
+        return dataclasses.replace(self, fitted=False, **narrowing)
+
     def search_bounds(self) -> tuple[float, float]:
-        """The box the fit searches the scales in (the declared bounds unless a term
-        narrows it)."""
-        return self.declared().bounds
+        """The box the fit searches the scales in: the declared bounds, one end narrowed
+        where :attr:`narrowed_by`'s field is given."""
+        box = list(self.declared().bounds)
+        if self.narrowing is not None:
+            box[self.narrowed_by[1]] = self.narrowing  # type: ignore[index]
+        return box[0], box[1]
 
     @property
     def text(self) -> str:
         v = self.scale
         if self.fitted:
-            return f"{self.name}:fit"
+            return f"{self.name}:fit" + ("" if self.narrowing is None
+                                         else f":{self.narrowing:g}")
         if v != self.declared().default:
             return f"{self.name}:" + (f"{v:g}" if isinstance(v, float)
                                       else ",".join(f"{x:g}" for x in v))
@@ -156,4 +194,6 @@ class AbstractScale(AbstractTerm):
                      else v}
         if self.fitted:
             out[f"{self.name}_fitted"] = True
+        if self.narrowing is not None:
+            out[f"{self.name}_{self.narrowed_by[0]}"] = self.narrowing  # type: ignore[index]
         return out

@@ -47,6 +47,7 @@ from ._cross_validation import cross_validation_of, not_worse
 from ._kept_terms import KeptTerms
 from ._phase import DEFAULT_FOLDS as DEFAULT_FOLDS
 from ._progress import Fits, grid_seconds, kept_seconds, split_seconds, train_rows
+from ._screened_terms import Screen, ScreenedTerms, screen_seconds, with_screened
 from ._splits import PhaseFolds, Splits, Validation
 
 #: The candidate estimators of :func:`select_model` and the pulls toward the a-priori
@@ -110,13 +111,16 @@ class Selection:
     """What :func:`select_model` returns: every candidate's validation (in the order
     tried) as ``(settings, validation)`` pairs, where ``settings`` is ``{"method",
     "sigma", "friction"}``; the chosen and the lowest candidate's settings; ``options``
-    the ``(estimator, model)`` of each candidate. :attr:`estimator` and :attr:`model` are
-    the chosen ones: ``identify(robot, data, sel.estimator, sel.model)`` fits it."""
+    the ``(estimator, model)`` of each candidate; ``screen`` the screen of the choice's
+    scales (:class:`~._screened_terms.Screen`) or None. :attr:`estimator` and
+    :attr:`model` are the chosen ones: ``identify(robot, data, sel.estimator,
+    sel.model)`` fits it."""
 
     candidates: tuple[tuple[dict, CrossValidation], ...]
     chosen: dict
     best: dict
     options: tuple[tuple[Estimator, TorqueModel], ...] = ()
+    screen: Screen | None = None
 
     def _index(self, settings) -> int:
         return next(i for i, (s, _) in enumerate(self.candidates) if s is settings)
@@ -162,11 +166,14 @@ class Selection:
                         "the lowest)" + ("; then the kept terms (the rows with kept_terms) "
                                          "added to it, kept unless their excess over it is "
                                          "above one standard error (or 1 % of it)"
-                                         if kept else ""),
+                                         if kept else "") + (
+                            "; then its scales searched where they validate better (the "
+                            "screen; the row with screened)" if self.screen else ""),
                 "chosen": self.chosen, "lowest": self.best,
                 "candidates": [{"settings": s, **cv.as_dict(),
-                                **({"kept_terms": True} if s.get("kept_terms") else {})}
-                               for s, cv in self.candidates]}
+                                **{k: True for k in ("kept_terms", "screened") if s.get(k)}}
+                               for s, cv in self.candidates],
+                "screen": None if self.screen is None else self.screen.as_dict()}
 
 
 #: The index of the candidate the one-standard-error rule picks among validations
@@ -178,7 +185,7 @@ def select_model(robot: Robot, data: Data, *,
                  models: TorqueModel | Iterable[TorqueModel] | None = None,
                  estimators: Estimator | Iterable[Estimator] | None = None,
                  validation: Validation = PhaseFolds(), limits: Limits = None,
-                 kept: KeptTerms | None = None,
+                 kept: KeptTerms | None = None, screened: ScreenedTerms | None = None,
                  progress: ProgressCallback | Fits | None = None) -> Selection:
     """Choose the torque model and the estimator by validation (module docstring).
 
@@ -192,7 +199,10 @@ def select_model(robot: Robot, data: Data, *,
     :attr:`~._cross_validation.CrossValidation.part_scores`). ``kept``: terms added to
     the choice, with its estimator, and kept unless they validate worse
     (:class:`~._kept_terms.KeptTerms`; their rows come last, ``"kept_terms": True`` in
-    their settings). ``progress(label, done, total)`` is called after each fit, ``done``
+    their settings). ``screened``: scales searched where they validate better, screened
+    on the choice (:class:`~._screened_terms.ScreenedTerms`; the choice with them
+    searched comes last where the screen passes, ``"screened": True`` in its settings;
+    :attr:`Selection.screen`). ``progress(label, done, total)`` is called after each fit, ``done``
     and ``total`` the estimated seconds of the fits done and of all (:mod:`.._work`;
     the kept terms' estimated for the costliest candidate until the choice is made)."""
     estimators = ESTIMATOR_CANDIDATES if estimators is None else one_or_more(estimators,
@@ -209,8 +219,12 @@ def select_model(robot: Robot, data: Data, *,
     rows = train_rows(prepared.samples, prepared.splits)
     each, seen = grid_seconds(rows, grid), set().union(*(parts(e, m) for e, m in grid))
     fits = Fits.of(progress)
-    fits.ahead(sum(map(sum, each)) + (0.0 if kept is None else max(
-        sum(map(sum, kept_seconds(rows, kept, e, models[-1], seen))) for e in estimators)))
+    last = models[-1] if kept is None or not kept.models(models[-1]) \
+        else kept.models(models[-1])[-1]
+    fits.ahead(sum(map(sum, each)) + max(
+        (0.0 if kept is None else sum(map(sum, kept_seconds(rows, kept, e, models[-1], seen))))
+        + (0.0 if screened is None else screen_seconds(screened, e, last, prepared.samples,
+                                                      prepared.splits)) for e in estimators))
     tried, options = [], []
     for (estimator, model), seconds in zip(grid, each):
         checked_estimator(estimator).check(model, limits)
@@ -223,10 +237,13 @@ def select_model(robot: Robot, data: Data, *,
     index = simplest_not_worse([cv for _, cv in tried], [e.physical for e, _ in options])
     if kept is not None:
         index = _with_kept(kept, index, tried, options, prepared, limits, fits)
+    screen = None
+    if screened is not None:
+        index, screen = with_screened(screened, index, tried, options, prepared, limits, fits)
     best_settings = min(tried, key=lambda c: c[1].score)[0]
     chosen = tried[index][0]
     return Selection(candidates=tuple(tried), chosen=chosen, best=best_settings,
-                     options=tuple(options))
+                     options=tuple(options), screen=screen)
 
 
 def revalidated(selection: Selection, robot: Robot, data: Data, validation: Validation,
@@ -244,7 +261,8 @@ def revalidated(selection: Selection, robot: Robot, data: Data, validation: Vali
     cv = prepared.validate(estimator, model, per_joint("limits", limits, robot.n_joints),
                            fits.after(f"{estimator.name}, {model.friction}, {signals}", each))
     return Selection(candidates=(*selection.candidates, (settings, cv)), chosen=settings,
-                     best=selection.best, options=(*selection.options, (estimator, model)))
+                     best=selection.best, options=(*selection.options, (estimator, model)),
+                     screen=selection.screen)
 
 
 def _with_kept(kept: KeptTerms, index: int, tried: list, options: list,
