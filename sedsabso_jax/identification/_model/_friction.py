@@ -62,23 +62,9 @@ class SmoothCoulomb(AbstractScale):
     fitted: bool = False
     smallest: float | None = None
     narrowed_by: ClassVar[tuple[str, int] | None] = ("smallest", 0)
+    narrowed_example: ClassVar[float] = SMOOTH_VELOCITY
     name: ClassVar[str] = "smooth"
     nonnegative: ClassVar[bool] = False
-
-    @classmethod
-    def parse(cls, option: str | None) -> AbstractTerm:
-        if option is None or not option.startswith("fit:"):
-            return super().parse(option)
-        try:
-            smallest = float(option[4:])
-        except ValueError:
-            smallest = float("nan")
-        if not cls._inside(smallest):
-            raise ValueError(f"friction term 'smooth': smooth:fit:SMALLEST searches each "
-                             f"joint's velocity scale from SMALLEST rad/s up, a number in "
-                             f"{cls.interval()}, got smooth:{option} (e.g. "
-                             f"smooth:fit:{SMOOTH_VELOCITY:g})")
-        return cls(fitted=True, smallest=smallest)
 
     def names(self, model: ModelView) -> tuple[str, ...]:
         if None in model.base.joint_columns("FC"):

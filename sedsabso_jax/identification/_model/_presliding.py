@@ -8,7 +8,7 @@ import numpy as np
 
 from ._dahl import dahl_state
 from ._scales import AbstractScale, scale
-from ._term import AbstractTerm, InSimulator, ModelView, Signals, diagonal
+from ._term import InSimulator, ModelView, Signals, diagonal
 
 #: Characteristic displacement (rad or m) of :class:`Presliding` unless told.
 PRESLIDING_DISPLACEMENT = 0.002
@@ -44,6 +44,7 @@ class Presliding(AbstractScale):
     scan: str = "auto"
     largest: float | None = None
     narrowed_by: ClassVar[tuple[str, int] | None] = ("largest", 1)
+    narrowed_example: ClassVar[float] = LARGEST_AT_REST
     name: ClassVar[str] = "presliding"
     unit: ClassVar[str] = "N m for friction at rest FP (the torque it saturates at)"
 
@@ -59,23 +60,6 @@ class Presliding(AbstractScale):
     def __check_init__(self):  # equinox also runs AbstractScale's
         if self.scan not in SCANS:
             raise ValueError(f"Presliding's scan must be one of {SCANS}, got {self.scan!r}")
-
-    @classmethod
-    def parse(cls, option: str | None) -> AbstractTerm:
-        if option is not None and option.startswith("fit:"):
-            try:
-                largest = float(option[4:])
-            except ValueError:
-                raise ValueError(f"friction term 'presliding': expected presliding:fit:LARGEST "
-                                 f"(rad, the largest displacement searched), got "
-                                 f"presliding:{option}") from None
-            if not cls._inside(largest):
-                raise ValueError(f"friction term 'presliding': presliding:fit:LARGEST searches "
-                                 f"each joint's displacement up to LARGEST rad, a number in "
-                                 f"{cls.interval()}, got presliding:{option} (e.g. "
-                                 f"presliding:fit:{LARGEST_AT_REST:g})")
-            return cls(fitted=True, largest=largest)
-        return super().parse(option)
 
     def names(self, model: ModelView) -> tuple[str, ...]:
         n = model.robot.n_joints

@@ -68,6 +68,8 @@ class AbstractScale(AbstractTerm):
     #: with ``fitted=True``) and the end it sets, 0 the lower, 1 the upper: the command
     #: line's ``name:fit:VALUE``; None: the declared box only.
     narrowed_by: ClassVar[tuple[str, int] | None] = None
+    #: A narrowing value the command line's messages give as an example.
+    narrowed_example: ClassVar[float] = 0.0
 
     @classmethod
     @functools.cache
@@ -158,6 +160,8 @@ class AbstractScale(AbstractTerm):
         if option is None or option == "fit":
             return cls(fitted=option == "fit")  # type: ignore[call-arg]
         field = cls.declared()
+        if cls.narrowed_by is not None and option.startswith("fit:"):
+            return cls._parse_narrowed(option)
         expected = (f"friction term {cls.name!r}: expected {cls.name}:fit or "
                     f"{cls.name}:{field.name.upper()} ({field.unit}, one or one per "
                     f"joint, comma-separated")
@@ -169,6 +173,25 @@ class AbstractScale(AbstractTerm):
             raise ValueError(f"{expected}, each > 0), got {cls.name}:{option}")
         return cls(**{field.name: values[0] if len(values) == 1  # type: ignore[arg-type]
                       else tuple(values)})
+
+    @classmethod
+    def _parse_narrowed(cls, option: str) -> AbstractTerm:
+        """The term of ``name:fit:VALUE``: searched with one end of its box at VALUE
+        (:attr:`narrowed_by`), checked to lie within the declared box."""
+        name, end = cls.narrowed_by  # type: ignore[misc]
+        field = cls.declared()
+        try:
+            value = float(option[4:])
+        except ValueError:
+            value = float("nan")
+        if not cls._inside(value):
+            word = name.upper()
+            where = f"up to {word}" if end else f"from {word} up"
+            raise ValueError(f"friction term {cls.name!r}: {cls.name}:fit:{word} searches "
+                             f"each joint's {field.name} {where} ({field.unit}), a number in "
+                             f"{cls.interval()}, got {cls.name}:{option} (e.g. "
+                             f"{cls.name}:fit:{cls.narrowed_example:g})")
+        return cls(fitted=True, **{name: value})  # type: ignore[call-arg]
 
     def nonlinear(self, model: ModelView) -> Nonlinear | None:
         if not self.fitted:

@@ -6,9 +6,10 @@ motions (the Staubli TX40's), but validating a model with them searched in every
 costs 2-3 times the default's identification. The default searches them from the
 candidates' own 0.02 rad/s up (:attr:`~.._default._policy.Default.screened_terms`): a
 sharper jump flips with the velocity's noise wherever a joint rests, which an
-excitation recording cannot show. So they are screened first, cheaply: with the chosen model's searched values held where a fit to
-all the data puts them, the scales are searched on all the data, and the two models are
-validated by the same splits with nothing searched in them. Only where the scales
+excitation recording cannot show. So they are screened first, cheaply: with the chosen
+model's searched values held where a fit to all the data puts them, the scales are
+searched on all the data, and the two models are validated by the same splits with
+nothing searched in them. Only where the scales
 validate better by the default's rule (:meth:`~.._default._policy.Default.not_worse`:
 the choice's split-by-split excess over them above one standard error) is the choice
 with them searched validated as any candidate is (each split's own search, starting
