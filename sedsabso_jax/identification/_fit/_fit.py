@@ -33,7 +33,8 @@ import numpy as np
 from ..._deprecation import caller_stacklevel
 from .._estimators._estimator import Estimator, EstimatorFit, FitProblem
 from .._estimators._least_squares import OLS
-from .._model._torque_model import TorqueModel, tree_key
+from .._model._leaves import tree_key
+from .._model._torque_model import TorqueModel
 from .._search._methods import HELD
 from ._projection import Projection
 from ._samples import Samples

@@ -37,8 +37,9 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .._model._leaves import tree_key
 from .._model._term import Signals, diagonal
-from .._model._torque_model import TorqueModel, tree_key
+from .._model._torque_model import TorqueModel
 from .._recordings import Data
 from .._search._problem import fitness
 from ._samples import Samples

@@ -14,7 +14,8 @@ from ...dynamics._robot import Robot
 from ...measurements._container import Measurements
 from .._estimators._estimator import FitProblem
 from .._estimators._normal_equations import NormalEquations
-from .._model._torque_model import TorqueModel, tree_key
+from .._model._leaves import tree_key
+from .._model._torque_model import TorqueModel
 from .._recordings import Data, is_several, recordings_of, stacked
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import jax
 import numpy as np
 
 from ...dynamics._base_parameters import RANK_TOLERANCE, random_states
@@ -22,12 +23,19 @@ def kept_columns(model: Any) -> np.ndarray:
     """Indices of the extra columns of ``model`` (a :class:`~._torque_model.TorqueModel`)
     that the base regressor does not span: scaled columns at random states, ordered QR
     (as :func:`~sedsabso_jax.base_parameters`); kept per model structure and values
-    (its base, recordings, transmission and terms, every field of each)."""
+    (its base, recordings, transmission and terms, every field of each). A model whose
+    searched values are traced (:meth:`~._torque_model.TorqueModel.partition`) is taken
+    with them at 1: which columns the base spans follows from the terms' kinds and fixed
+    values, not from a scale's value."""
+    if any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(model.terms)):
+        model = jax.tree_util.tree_map(
+            lambda x: np.ones(x.shape) if isinstance(x, jax.core.Tracer) else x, model)
     key = model.structure
     if key not in _KEPT:
         if len(_KEPT) >= KEEP:
             del _KEPT[next(iter(_KEPT))]
-        _KEPT[key] = _independent(model)
+        with jax.ensure_compile_time_eval():  # concrete, inside jax.jit too
+            _KEPT[key] = _independent(model)
     return _KEPT[key]
 
 

@@ -9,7 +9,6 @@ import functools
 from typing import Any, ClassVar
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -202,14 +201,7 @@ class AbstractScale(AbstractTerm):
         return Nonlinear(tuple(f"{field.symbol}{j + 1}" for j in range(n)),
                          np.clip(np.broadcast_to(np.asarray(self.scale, float), (n,)), lo, hi),
                          np.full(n, lo),
-                         np.full(n, hi), field.unit)
-
-    def with_nonlinear(self, values: Any) -> AbstractTerm:
-        if isinstance(values, jax.core.Tracer):  # a trial inside a compiled search
-            name = self.declared().name
-            return eqx.tree_at(lambda t: getattr(t, name), self, values)
-        scale = {self.declared().name: tuple(float(v) for v in np.asarray(values))}
-        return dataclasses.replace(self, **scale)  # type: ignore[arg-type]
+                         np.full(n, hi), field.unit, field.name)
 
     def settings(self) -> dict:
         v = self.scale

@@ -44,13 +44,18 @@ from ._dahl import increments
 class Nonlinear:
     """A term's parameters that enter its columns nonlinearly and that a fit searches
     (each ``(k,)``: ``values`` to start from, ``lower`` and ``upper`` bounds, all > 0,
-    searched in log scale), their ``names`` in reports and their ``unit``."""
+    searched in log scale), their ``names`` in reports and their ``unit``; ``field``:
+    the term's field that holds them, a leaf of the model
+    (:meth:`~._torque_model.TorqueModel.partition`: an array ``(k,)`` in a trial, floats
+    once found), or None where the term places them itself
+    (:meth:`~AbstractTerm.with_nonlinear`)."""
 
     names: tuple[str, ...]
     values: np.ndarray
     lower: np.ndarray
     upper: np.ndarray
     unit: str
+    field: str | None = None
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -190,12 +195,15 @@ class AbstractTerm(eqx.Module):
         return False
 
     def nonlinear(self, model: ModelView) -> Nonlinear | None:
-        """The parameters a fit searches, or None (none, or fixed)."""
+        """The parameters a fit searches, or None (none, or fixed); their
+        :attr:`Nonlinear.field` names the field that holds them."""
         return None
 
     def with_nonlinear(self, values: Any) -> "AbstractTerm":
         """The term with its searched parameters at ``values`` (floats; or traced values
-        inside a compiled search, taken as they are)."""
+        inside a compiled search, taken as they are), for a term whose
+        :meth:`nonlinear` names no :attr:`Nonlinear.field` (the model places them in that
+        field otherwise)."""
         raise ValueError(f"term {self.name!r} has no parameters to search")
 
     def held(self, model: ModelView, values: np.ndarray) -> InSimulator | None:

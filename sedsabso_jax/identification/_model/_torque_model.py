@@ -17,9 +17,10 @@ identified apart. :attr:`TorqueModel.regrouped` names them.
 
 The model reads every term's answers (:mod:`._term`) and branches on none of their
 kinds: the parameters its terms search (:meth:`TorqueModel.nonlinear`,
-:meth:`TorqueModel.with_nonlinear`) and how (:attr:`TorqueModel.search`), what they read
-of a fit (:meth:`TorqueModel.reading`), the constraints of a physical body
-(:attr:`TorqueModel.nonnegative`, :attr:`TorqueModel.bodies`).
+:meth:`TorqueModel.with_nonlinear`, as leaves :meth:`TorqueModel.partition`) and how
+(:attr:`TorqueModel.search`), what they read of a fit (:meth:`TorqueModel.reading`),
+the constraints of a physical body (:attr:`TorqueModel.nonnegative`,
+:attr:`TorqueModel.bodies`).
 """
 
 from __future__ import annotations
@@ -39,29 +40,13 @@ from ...dynamics._base_parameters import BaseParameters, base_parameters
 from ...dynamics._robot import Robot
 from ...measurements._transmission import Transmission, TransmissionLike, coupled_motors
 from .._search._methods import AbstractSearch, CoordinateSearch
+from ._leaves import partition, tree_key, with_nonlinear
 from ._order import canonical_order, friction_text
 from ._regrouping import kept_columns
 from ._term import AbstractTerm, Nonlinear, Signals
 
 #: How a model's nonlinear parameters are searched unless it says otherwise.
 DEFAULT_SEARCH = CoordinateSearch()
-
-
-def tree_key(tree: Any) -> tuple:
-    """A hashable key of ``tree`` (a pytree: a term, a base, a search; for a model its
-    :attr:`~TorqueModel.structure`, since a model's own tree also carries the answers it
-    has cached) by its structure and values: its tree structure (the classes, their
-    static fields) and each leaf's value (an array's shape, dtype and bytes). Two trees
-    with equal keys compute the same columns, whatever their ``settings()`` say."""
-    leaves, treedef = jax.tree_util.tree_flatten(tree)
-    return (treedef, tuple(_leaf_key(x) for x in leaves))
-
-
-def _leaf_key(x: Any) -> Any:
-    if isinstance(x, (np.ndarray, jax.Array)) and not isinstance(x, jax.core.Tracer):
-        a = np.asarray(x)
-        return (a.shape, a.dtype.str, a.tobytes())
-    return x
 
 
 def _matrix(transmission: object) -> object:
@@ -294,7 +279,8 @@ class TorqueModel(eqx.Module):
         s = Signals(q, qd, qdd, recording, coulomb, None, probe, steps)
         if base_rows is None:
             return s
-        rigid: Any = np.take(base_rows, self.rigid_columns, axis=-1)  # faster than indexing
+        take = np.take if isinstance(base_rows, np.ndarray) else jnp.take  # np: no copy
+        rigid: Any = take(base_rows, self.rigid_columns, axis=-1)  # faster than indexing
         bodies = [term.columns(self, s) for term in self.terms if term.body]
         if bodies:
             rigid = jnp.concatenate([rigid, *bodies], -1)
@@ -303,7 +289,12 @@ class TorqueModel(eqx.Module):
     def _full_regressor(self, q, qd, qdd, recording=None, base_rows=None, probe=None,
                         rows=None) -> np.ndarray:
         q, qd, qdd = (np.asarray(a, dtype=float) for a in (q, qd, qdd))
-        Y = np.asarray(self.base.regressor(q, qd, qdd) if base_rows is None else base_rows)
+        Y = self.base.regressor(q, qd, qdd) if base_rows is None else base_rows
+        # traced (searched values, :meth:`partition`, or inside jax.jit): the columns
+        # assembled in jax.numpy; else in NumPy, the measured rows not copied into JAX
+        xp: Any = jnp if any(isinstance(x, jax.core.Tracer)
+                             for x in jax.tree_util.tree_leaves((self.terms, Y))) else np
+        Y = xp.asarray(Y)
         n = self.robot.n_joints
         batch = Y.shape[:-2]
         q, qd, qdd = (np.broadcast_to(a, batch + (n,)) for a in (q, qd, qdd))
@@ -312,12 +303,15 @@ class TorqueModel(eqx.Module):
         if mask is not None and (mask.dtype != bool or mask.shape != batch[:1]):
             raise ValueError(f"rows must be {batch[:1]} booleans, got {mask.dtype} {mask.shape}")
         keep: Any = slice(None) if mask is None else mask
-        Y = Y[keep].copy() if self.shaping else Y[keep]
+        Y = Y[keep].copy() if self.shaping and xp is np else Y[keep]
         if self.shaping:  # a term reshapes the Coulomb columns
-            Y[..., np.arange(n), np.array(self.base.joint_columns("FC"))] = \
-                np.asarray(s.coulomb)[keep]
-        extra = [np.asarray(term.columns(self, s))[keep] for term in self.terms]
-        return np.concatenate([Y, *extra], -1)
+            fc = (..., np.arange(n), np.array(self.base.joint_columns("FC")))
+            if xp is np:
+                Y[fc] = np.asarray(s.coulomb)[keep]
+            else:
+                Y = Y.at[fc].set(s.coulomb[keep])
+        extra = [xp.asarray(term.columns(self, s))[keep] for term in self.terms]
+        return xp.concatenate([Y, *extra], -1)
 
     def regressor(self, q: Float[ArrayLike, "*batch n"], qd: Float[ArrayLike, "*batch n"],
                   qdd: Float[ArrayLike, "*batch n"],
@@ -353,25 +347,20 @@ class TorqueModel(eqx.Module):
     def nonlinear(self) -> list[tuple[int, Nonlinear]]:
         """The parameters a fit searches: ``(term index, Nonlinear)`` of each term that
         has some."""
-        out = []
-        for i, term in enumerate(self.terms):
-            found = term.nonlinear(self)
-            if found is not None:
-                out.append((i, found))
-        return out
+        found = ((i, term.nonlinear(self)) for i, term in enumerate(self.terms))
+        return [(i, f) for i, f in found if f is not None]
+
+    def partition(self) -> tuple[TorqueModel, TorqueModel]:
+        """``(searched, rest)``: the searched parameters as leaves, as ``equinox.partition``
+        gives them; ``equinox.combine(searched, rest)`` is the model with their values
+        (:func:`~._leaves.partition`)."""
+        return partition(self)
 
     def with_nonlinear(self, values: Any) -> TorqueModel:
         """The model with the searched parameters at ``values`` (those of
-        :meth:`nonlinear`, concatenated; traced values inside a compiled search)."""
-        terms, k = list(self.terms), 0
-        for i, found in self.nonlinear():
-            m = len(found.values)
-            terms[i] = terms[i].with_nonlinear(values[k:k + m])
-            k += m
-        if k != np.shape(values)[0]:
-            raise ValueError(f"expected {k} nonlinear parameters, got {np.shape(values)[0]}")
-        # the terms in their places (each checked itself): floats or traced values alike
-        return eqx.tree_at(lambda m: m.terms, self, tuple(terms))
+        :meth:`nonlinear`, concatenated; traced values inside a compiled search, as array
+        leaves: :func:`~._leaves.with_nonlinear`)."""
+        return with_nonlinear(self, values)
 
     @property
     def waiting(self) -> bool:
