@@ -6,6 +6,7 @@ deviation), not dropped."""
 
 from __future__ import annotations
 
+import contextlib
 from typing import Any
 
 import jax
@@ -27,15 +28,16 @@ def kept_columns(model: Any) -> np.ndarray:
     searched values are traced (:meth:`~._torque_model.TorqueModel.partition`) is taken
     with them at 1: which columns the base spans follows from the terms' kinds and fixed
     values, not from a scale's value."""
-    if any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(model.terms)):
+    traced = any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(model.terms))
+    if traced:
         model = jax.tree_util.tree_map(
             lambda x: np.ones(x.shape) if isinstance(x, jax.core.Tracer) else x, model)
     key = model.structure
     if key not in _KEPT:
         if len(_KEPT) >= KEEP:
             del _KEPT[next(iter(_KEPT))]
-        with jax.ensure_compile_time_eval():  # concrete, inside jax.jit too
-            _KEPT[key] = _independent(model)
+        with jax.ensure_compile_time_eval() if traced else contextlib.nullcontext():
+            _KEPT[key] = _independent(model)  # concrete, inside jax.jit too
     return _KEPT[key]
 
 
