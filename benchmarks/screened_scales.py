@@ -13,7 +13,7 @@ point with dwells, pick and place, slow reversals; each the mean over three). He
 plants by default (8-15: the screen has no constant of its own, and the default's were
 chosen on plants 0-7).
 
-    python -m benchmarks.screened_scales [--plants 8-15] [--json PATH]
+    python -m benchmarks.screened_scales [--plants 8-15] [--position-noise RAD] [--json PATH]
 
 Figures: NRMS over the joint torque limits [%], per plant and kind of motion, with and
 without the screen, and their ratio; whether the screen passed and the scales were
@@ -36,12 +36,16 @@ from sedsabso_jax.dynamics import joint_limits
 from sedsabso_jax.identification import DefaultValidation, candidate_models
 
 
-def plant_rows(p: int, designs: list, robot, tau_max, models) -> dict:
-    """Plant ``p`` identified with and without the screen, judged on its new motions."""
+def plant_rows(p: int, designs: list, robot, tau_max, models,
+               position_noise: float | None = None) -> dict:
+    """Plant ``p`` identified with and without the screen, judged on its new motions
+    (``position_noise``: the recorded positions' [rad], None: the plant's own)."""
     plant = Plant(robot, tau_max, seed=p)
+    if position_noise is not None:
+        plant.position_noise = position_noise
     data = plant.record(designs[0], 1.0, seed=0)
     new = new_motions(plant, designs, range(1, 4))
-    out: dict = {"plant": p}
+    out: dict = {"plant": p, "position_noise": plant.position_noise}
     for name, screened in (("with", sj.identification.SCREENED_TERMS), ("without", None)):
         t0 = time.perf_counter()
         with warnings.catch_warnings():
@@ -58,7 +62,8 @@ def plant_rows(p: int, designs: list, robot, tau_max, models) -> dict:
                         for k in MOTIONS}}
         if screen is not None:
             out[name].update(passed=screen.passed, kept=screen.kept,
-                             scales=screen.scales())
+                             scales=screen.scales(), smallest=screen.smallest(),
+                             noise=screen.noise)
     out["ratio"] = {k: out["with"][k] / out["without"][k] for k in MOTIONS}
     return out
 
@@ -67,6 +72,8 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--plants", default="8-15", help="first-last plant seeds (8-15)")
     ap.add_argument("--json", default=None)
+    ap.add_argument("--position-noise", type=float, default=None,
+                    help="the recorded positions' noise [rad] (default: the plants' 2e-4)")
     args = ap.parse_args(argv)
     first, last = (int(x) for x in args.plants.split("-"))
     jax.config.update("jax_enable_x64", True)
@@ -82,10 +89,11 @@ def main(argv: list[str] | None = None) -> None:
                                         search=sj.excitation.DesignSearch(iterations=30),
                                         duration=DURATION, rate=RATE).trajectory
                    for seed in (p, 16, 17, 18)]
-        row = plant_rows(p, designs, robot, tau_max, models)
+        row = plant_rows(p, designs, robot, tau_max, models, args.position_noise)
         rows.append(row)
         w = row["with"]
-        print(f"plant {p}: screen {'passed' if w.get('passed') else 'not passed'}"
+        print(f"plant {p}: screen from {w.get('smallest', 0):.3g} rad/s, "
+              f"{'passed' if w.get('passed') else 'not passed'}"
               f"{', kept' if w.get('kept') else ''}; "
               + ", ".join(f"{k} {w[k]:.3f}/{row['without'][k]:.3f}" for k in MOTIONS)
               + f"; {w['seconds']:.0f} s / {row['without']['seconds']:.0f} s", flush=True)

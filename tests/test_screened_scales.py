@@ -1,7 +1,8 @@
 """The smooth Coulomb's scales in the default, searched where they validate better
-(``sj.identification.ScreenedTerms``, ``SCREENED_TERMS``): the terms' bookkeeping, and
-the default on simulated arms whose Coulomb friction turns slowly (the scales kept, the
-held-out error lower) or at once (not kept, nothing validated beyond the screen)."""
+(``sj.identification.ScreenedTerms``, ``SCREENED_TERMS``): the terms' bookkeeping, the
+smallest scale from the velocities' noise, and the default on simulated arms whose
+Coulomb friction turns slowly (the scales kept, the held-out error lower) or at once:
+kept where the positions are clean, not where their noise would flip a sharp jump."""
 
 from __future__ import annotations
 
@@ -54,6 +55,72 @@ def test_the_screened_model_searches_the_scales_from_the_values_given():
     with pytest.raises(TypeError, match="screened must be ScreenedTerms"):
         DefaultValidation(screened=sj.SmoothCoulomb(fitted=True))
     assert DefaultValidation().screened == SCREENED_TERMS
+    assert SCREENED_TERMS.noise_floor == 6.0 and SCREENED_TERMS.noise is None
+
+
+def _recording(noise: float, rate: float = 100.0, T: int = 3000) -> sj.Measurements:
+    """A slow sine on three joints, its positions with white ``noise`` [rad]."""
+    t = np.arange(T) / rate
+    q = 0.5 * np.sin(2 * np.pi * 0.2 * t[:, None] * [1.0, 1.3, 1.7])
+    q = q + noise * np.random.default_rng(0).standard_normal(q.shape)
+    qd, qdd = sj.measurements.differentiate(t, q)
+    return sj.Measurements(t, q, qd, qdd, np.zeros_like(q))
+
+
+@pytest.mark.parametrize("rate", [100.0, 1000.0])
+def test_the_smallest_scale_is_the_floor_times_the_velocities_noise(rate):
+    """The velocities' noise is what the positions' noise puts on the derived velocities:
+    against the derived velocities' own error (the noise-free motion's derivative known)
+    within 15 %, at 100 Hz and 1 kHz; the screened scale's smallest is the floor times it."""
+    m = _recording(2e-4, rate)
+    clean = _recording(0.0, rate)
+    error = (m.qd - clean.qd)[int(rate):-int(rate)].std(axis=0)
+    found = sj.measurements.velocity_noise(m.times, m.q)
+    np.testing.assert_allclose(found, error, rtol=0.15)
+    floored = SCREENED_TERMS.at_noise([m])
+    assert floored.noise == pytest.approx(found.max())
+    assert floored.terms[0].smallest == pytest.approx(6.0 * found.max())
+    assert floored.terms[0].search_bounds()[0] == floored.terms[0].smallest
+
+
+def test_the_velocities_noise_of_a_split_is_its_recordings():
+    """A validation split's samples (stretches with gaps between them) give the noise of
+    their recording: the differences are taken within the stretches only."""
+    m = _recording(2e-4)
+    part = m.subset((np.arange(m.n_samples) // 8) % 2 == 0)  # stretches of 8 samples
+    whole = sj.measurements.velocity_noise(m.times, m.q)
+    np.testing.assert_allclose(sj.measurements.velocity_noise(part.times, part.q), whole,
+                               rtol=0.1)
+    assert SCREENED_TERMS.at_noise([part]).noise == pytest.approx(whole.max(), rel=0.1)
+
+
+def test_the_velocities_noise_follows_the_recordings_chain():
+    """Velocities derived at 5 Hz carry less of the positions' noise than at 10 Hz (about
+    2^1.5 less, the derivative's gain growing with the frequency): the floor reads each
+    recording's chain."""
+    m = _recording(2e-4)
+    at_5 = sj.measurements.recorded_signals(m.times, m.q, m.tau,
+                                            chain=sj.measurements.SignalChain(cutoff_hz=5.0))
+    noise_5 = SCREENED_TERMS.at_noise([at_5]).noise
+    noise_10 = SCREENED_TERMS.at_noise([m]).noise
+    assert noise_5 == pytest.approx(np.max(sj.measurements.velocity_noise(
+        at_5.times, at_5.q, 5.0)))
+    assert 2.0 < noise_10 / noise_5 < 3.5
+    # several recordings: the noisiest sets the floor
+    assert SCREENED_TERMS.at_noise([at_5, m]).noise == noise_10
+
+
+def test_the_floor_falls_back_to_the_terms_own_where_the_noise_is_not_given():
+    clean = _recording(0.0)
+    assert SCREENED_TERMS.at_noise([clean]).terms[0].smallest == 1e-4  # the declared bound
+    no_times = sj.Measurements(np.arange(3000.0), clean.q, clean.qd, clean.qdd, clean.tau)
+    assert SCREENED_TERMS.at_noise([no_times]) is SCREENED_TERMS  # 1 Hz: no 10 Hz filter
+    given = ScreenedTerms(sj.SmoothCoulomb(fitted=True, smallest=0.05))
+    assert given.at_noise([_recording(2e-4)]) is given  # no floor: the term's own
+    loud = SCREENED_TERMS.at_noise([_recording(0.05)])  # a floor above the box: its top
+    assert 0.99 < loud.terms[0].smallest < 1.0
+    with pytest.raises(ValueError, match="noise_floor must be a number > 0"):
+        ScreenedTerms(sj.SmoothCoulomb(fitted=True), noise_floor=0)
 
 
 def test_the_smallest_scale_searched_is_the_terms_option():
@@ -69,10 +136,10 @@ def test_the_smallest_scale_searched_is_the_terms_option():
         sj.SmoothCoulomb(smallest=0.02)
 
 
-def _arm(tmp_path, velocity: float) -> list[str]:
+def _arm(tmp_path, velocity: float, noise: float = 0.0) -> list[str]:
     """The RS010N with Coulomb friction ``2 tanh(qd / velocity)``, fitted on an
     excitation, validated on a slower motion that spends its time where the shape
-    matters."""
+    matters; with position ``noise`` [rad], velocities and accelerations derived."""
     robot = sj.robots.rs010n()
     t = np.arange(1200) / 100.0
     w = 2 * np.pi / 6.0
@@ -83,7 +150,11 @@ def _arm(tmp_path, velocity: float) -> list[str]:
         qdd = np.gradient(qd, t, axis=0)
         tau = np.array(sj.inverse_dynamics(robot, robot.params, q, qd, qdd))
         tau += 2.0 * np.tanh(qd / velocity) + 0.5 * qd
-        tau += 0.02 * np.random.default_rng(seed).standard_normal(tau.shape)
+        rng = np.random.default_rng(seed)
+        tau += 0.02 * rng.standard_normal(tau.shape)
+        if noise:
+            q = q + noise * rng.standard_normal(q.shape)
+            qd, qdd = sj.measurements.differentiate(t, q)
         out.append(str(sj.Measurements(t, q, qd, qdd, tau).save(tmp_path / f"m{seed}.npz")))
     return out
 
@@ -113,13 +184,31 @@ def test_the_default_keeps_the_scales_where_the_friction_turns_slowly(tmp_path, 
     assert "scales searched where they validate better" in capsys.readouterr().out
 
 
-def test_the_default_leaves_the_scales_where_the_friction_turns_at_once(tmp_path):
-    """A jump sharper than the candidates' 0.02 rad/s is not searched for: it would flip
-    with the velocity's noise wherever a joint rests, which an excitation cannot show."""
-    doc = _identify(_arm(tmp_path, 0.002), tmp_path / "r.json")
+def test_a_sharp_jump_is_kept_where_the_positions_are_clean(tmp_path):
+    """Coulomb friction that turns over 2 mrad/s, positions without noise: the scales are
+    searched from the declared 1e-4 rad/s, found within a factor 3 on the joints whose
+    jump the excitation crosses often, kept, and the held-out error falls by more than
+    half."""
+    paths = _arm(tmp_path, 0.002)
+    doc = _identify(paths, tmp_path / "with.json")
+    without = _identify(paths, tmp_path / "without.json", "--no-searched-scales")
+    screen = doc["cross_validation"]["selection"]["screen"]
+    assert screen["smallest"] == 1e-4 and screen["noise"] < 1e-5
+    assert screen["passed"] and screen["kept"]
+    assert 0.002 / 3 < screen["scales"]["v_smooth2"] < 0.002 * 3
+    assert (doc["validation"]["relative_rms_percent_overall"]
+            < 0.5 * without["validation"]["relative_rms_percent_overall"])
+
+
+def test_a_sharp_jump_is_not_searched_below_the_velocities_noise(tmp_path):
+    """The same arm, positions with 0.2 mrad of noise (velocities derived): the scales are
+    searched from 6 times the velocities' noise up (about 17 mrad/s), which a jump of 2
+    mrad/s does not reach: not kept, nothing validated beyond the screen."""
+    doc = _identify(_arm(tmp_path, 0.002, noise=2e-4), tmp_path / "r.json")
     selection = doc["cross_validation"]["selection"]
-    assert min(selection["screen"]["scales"].values()) >= 0.02
-    assert not selection["screen"]["passed"] and not selection["screen"]["kept"]
+    screen = selection["screen"]
+    assert 0.01 < screen["smallest"] == pytest.approx(6 * screen["noise"])
+    assert min(screen["scales"].values()) >= screen["smallest"]
+    assert not screen["passed"] and not screen["kept"]
     assert "smooth:fit" not in doc["settings"]["friction"]
     assert not any(c.get("screened") for c in selection["candidates"])
-

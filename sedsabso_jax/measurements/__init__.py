@@ -15,9 +15,12 @@ from ._signal import describe_signals as describe_signals
 from ._signal import differentiate as differentiate
 from ._signal import lowpass as lowpass
 from ._signal import median_rate as median_rate
+from ._signal import position_noise as position_noise
+from ._signal import velocity_noise as velocity_noise
 from ._transmission import coupled_motors as coupled_motors
 
 __all__ = [
     "DEFAULT_CUTOFF_HZ", "lowpass", "differentiate", "median_rate", "coupled_motors",
-    "describe_signals", "SignalChain", "Recorded", "recorded_signals",
+    "describe_signals", "SignalChain", "Recorded", "recorded_signals", "position_noise",
+    "velocity_noise",
 ]

@@ -117,6 +117,42 @@ def differentiate(times: Float[ArrayLike, " T"], q: Float[ArrayLike, "T n"],
     return qd, np.gradient(qd, times, axis=0)
 
 
+def position_noise(q: Float[ArrayLike, "T n"],
+                   times: Float[ArrayLike, " T"] | None = None) -> Float[np.ndarray, " n"]:
+    """Each joint's white noise on positions ``q (T, n)`` (a robust standard deviation):
+    the fourth differences of a smooth motion nearly vanish while white noise's have 70
+    times its variance, so the noise is ``1.4826 MAD(d4 q) / sqrt(70)`` (the median
+    absolute deviation's consistency factor for a normal distribution). With ``times``,
+    differences only within stretches without a gap (a step above 1.5 median steps: a
+    split's samples)."""
+    q = np.asarray(q, dtype=float)
+    if times is None:
+        d4 = np.diff(q, 4, axis=0)
+    else:
+        step = np.diff(np.asarray(times, dtype=float))
+        cuts = np.flatnonzero(step > 1.5 * np.median(step)) + 1
+        d4 = np.concatenate([np.diff(part, 4, axis=0) for part in np.split(q, cuts)
+                             if len(part) > 4] or [np.zeros((0, q.shape[1]))])
+    if not d4.shape[0]:
+        raise ValueError("position_noise: no stretch of 5 samples without a gap")
+    return 1.4826 * np.median(np.abs(d4 - np.median(d4, axis=0)), axis=0) / np.sqrt(70.0)
+
+
+def velocity_noise(times: Float[ArrayLike, " T"], q: Float[ArrayLike, "T n"],
+                   cutoff_hz: float = DEFAULT_CUTOFF_HZ) -> Float[np.ndarray, " n"]:
+    """Each joint's noise on velocities derived from positions ``q (T, n)`` at ``times``
+    (:func:`differentiate` at ``cutoff_hz``) by their white noise (:func:`position_noise`,
+    within stretches without a gap): that noise times the derivation's gain on white
+    noise at the same median rate (a fixed draw of at least 4000 samples or 50 cutoff
+    periods, its middle half: the filter's ends ring). A ValueError where the cutoff is
+    not below half the rate, as :func:`differentiate`'s."""
+    rate = median_rate(times)
+    n = int(max(4000, 50 * rate / cutoff_hz))
+    white = np.random.default_rng(0).standard_normal((n, 1))
+    qd, _ = differentiate(np.arange(n) / rate, white, cutoff_hz, source="velocity_noise")
+    return position_noise(q, times) * float(np.std(qd[n // 4:3 * n // 4]))
+
+
 def describe_signals(info: dict | None) -> str:
     """How a recording's signals were obtained, in words, from its
     :attr:`~sedsabso_jax.Measurements.info` (:func:`~._load.load_measurements`'s record;

@@ -45,8 +45,9 @@ class Default(eqx.Module):
     Kept terms: ``kept_terms``, added to the chosen model and kept unless they validate
     worse (friction at rest, its displacements searched up to ``largest_at_rest``, rad
     or m). Screened terms: ``screened_terms``, their scales searched in the chosen model
-    where they validate better (the smooth Coulomb's, from ``smallest_smooth`` up, rad/s
-    or m/s).
+    where they validate better (the smooth Coulomb's, from ``noise_floor`` times the
+    velocities' noise up where the recordings' times give it, from ``smallest_smooth``
+    where they do not, rad/s or m/s).
 
     Splits: ``folds`` phase folds (a lag whose normalised autocorrelation reaches
     ``repeat_correlation`` is a repeat of the motion); speed splits fit below
@@ -73,6 +74,7 @@ class Default(eqx.Module):
     prior_strengths: tuple[float, ...] = (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)
     largest_at_rest: float = LARGEST_AT_REST
     smallest_smooth: float = SMOOTH_VELOCITY
+    noise_floor: float = 6.0
     folds: int = 5
     repeat_correlation: float = 0.95
     fit_below: float = 0.7
@@ -111,8 +113,9 @@ class Default(eqx.Module):
     @property
     def screened_terms(self) -> tuple[AbstractScale, ...]:
         """The terms whose scales are searched where they validate better: the smooth
-        Coulomb's, from ``smallest_smooth`` up (never a sharper jump at rest than the
-        candidates' own)."""
+        Coulomb's, from ``smallest_smooth`` up (the candidates' own) where the
+        recordings do not give the velocities' noise
+        (:meth:`~.._validation._screened_terms.ScreenedTerms.at_noise`)."""
         return (SmoothCoulomb(fitted=True, smallest=self.smallest_smooth),)
 
     def estimator_candidates(self, method: str | None = None, sigma: Sigma = AUTO,

@@ -3,13 +3,14 @@
 
 Searching the smooth Coulomb's scale of every joint can lower a robot's error on new
 motions (the Staubli TX40's), but validating a model with them searched in every split
-costs 2-3 times the default's identification. The default searches them from the
-candidates' own 0.02 rad/s up (:attr:`~.._default._policy.Default.screened_terms`): a
-sharper jump flips with the velocity's noise wherever a joint rests, which an
-excitation recording cannot show. So they are screened first, cheaply: with the chosen
-model's searched values held where a fit to all the data puts them, the scales are
-searched on all the data, and the two models are validated by the same splits with
-nothing searched in them. Only where the scales
+costs 2-3 times the default's identification. The default searches them from
+:attr:`~.._default._policy.Default.noise_floor` (6) times the velocities' noise up
+(:meth:`ScreenedTerms.at_noise`; from the candidates' own 0.02 rad/s where the
+recordings do not give it): a sharper jump flips with that noise wherever a joint
+rests, which an excitation recording cannot show. They are screened first, cheaply:
+with the chosen model's searched values held where a fit to all the data puts them, the
+scales are searched on all the data, and the two models are validated by the same
+splits with nothing searched in them. Only where the scales
 validate better by the default's rule (:meth:`~.._default._policy.Default.not_worse`:
 the choice's split-by-split excess over them above one standard error) is the choice
 with them searched validated as any candidate is (each split's own search, starting
@@ -21,11 +22,14 @@ docs/explanation/identification-defaults.md."""
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from typing import Any
 
 import equinox as eqx
 import numpy as np
 
+from ...measurements._container import Measurements
+from ...measurements._signal import DEFAULT_CUTOFF_HZ, velocity_noise
 from .._default._policy import DEFAULT
 from .._estimators._estimator import Estimator, checked_estimator
 from .._fit._fit import fit as fit_model
@@ -33,6 +37,7 @@ from .._fit._samples import Samples
 from .._model._scales import AbstractScale
 from .._model._term import AbstractTerm
 from .._model._torque_model import TorqueModel
+from .._options import as_float, check_number
 from .._search._methods import HELD, AbstractSearch, CoordinateSearch
 from .._work import fit_seconds
 from ._cross_validation import CrossValidation
@@ -51,10 +56,17 @@ class ScreenedTerms(eqx.Module):
     chosen model's term of its kind where that one's scale is not searched (a model
     without such a term is not screened); their scales start from the model's.
     ``search``: how the screen searches them on all the data (coarse, without Newton's
-    polish: the validation that decides searches them again in each split)."""
+    polish: the validation that decides searches them again in each split).
+    ``noise_floor``: a velocity scale's smallest (a term whose box narrows from below,
+    :attr:`~.._model._scales.AbstractScale.narrowed_by`, ``smooth:fit:SMALLEST``) is
+    this many times the velocities' noise where the recordings give it
+    (:meth:`at_noise`); None: the terms' own. ``noise``: that noise, rad/s (None: not
+    measured)."""
 
     terms: tuple[AbstractScale, ...] = eqx.field(converter=_terms)
     search: AbstractSearch = CoordinateSearch(newton=0)
+    noise_floor: float | None = eqx.field(default=None, converter=as_float)
+    noise: float | None = None
 
     def __check_init__(self):
         if not self.terms or not all(isinstance(t, AbstractScale) and t.fitted
@@ -64,6 +76,36 @@ class ScreenedTerms(eqx.Module):
         if not isinstance(self.search, AbstractSearch) or not self.search.searches:
             raise TypeError(f"ScreenedTerms' search must be a search method "
                             f"(CoordinateSearch(), ...), got {self.search!r}")
+        if self.noise_floor is not None:
+            check_number("ScreenedTerms' noise_floor", self.noise_floor, strict=True)
+
+    def at_noise(self, recordings: Sequence[Measurements]) -> ScreenedTerms:
+        """These terms with each velocity scale's smallest at :attr:`noise_floor` times
+        the velocities' noise of ``recordings`` (the largest joint's and recording's:
+        :func:`~sedsabso_jax.measurements.velocity_noise` of the positions, at each
+        recording's chain's cutoff), at least the scale's declared lower bound, and
+        :attr:`noise` set; as they are without a floor, or where a recording's times
+        cannot give it (too few samples, or a rate below twice the cutoff: arrays
+        without times)."""
+        if self.noise_floor is None:
+            return self
+        try:
+            noise = max(float(np.max(velocity_noise(
+                m.times, m.q, DEFAULT_CUTOFF_HZ if m.chain is None else m.chain.cutoff_hz)))
+                for m in recordings)
+        except ValueError:
+            return self
+
+        def floored(t: AbstractScale) -> AbstractScale:
+            if t.narrowed_by is None or t.narrowed_by[1] != 0:
+                return t
+            lo, hi = t.declared().bounds
+            smallest = max(lo, self.noise_floor * noise)  # type: ignore[operator]
+            return dataclasses.replace(t, **{t.narrowed_by[0]: min(smallest,
+                                                                    np.nextafter(hi, 0))})
+
+        return dataclasses.replace(self, terms=tuple(floored(t) for t in self.terms),
+                                   noise=noise)
 
     def searched(self, model: TorqueModel, start: TorqueModel | None = None
                  ) -> TorqueModel | None:
@@ -99,8 +141,8 @@ class ScreenedTerms(eqx.Module):
 
 #: What :func:`~sedsabso_jax.select_and_identify` screens by default
 #: (:attr:`~.._default._policy.Default.screened_terms`: the smooth Coulomb's velocity
-#: scales, from 0.02 rad/s up).
-SCREENED_TERMS = ScreenedTerms(DEFAULT.screened_terms)
+#: scales, from 6 times the velocities' noise up, or from 0.02 rad/s).
+SCREENED_TERMS = ScreenedTerms(DEFAULT.screened_terms, noise_floor=DEFAULT.noise_floor)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -109,13 +151,23 @@ class Screen:
     screened scales searched on all the data (the other searched values held);
     ``without`` and ``with_found``, the choice's fit and ``found`` validated with every
     searched value held; ``passed``: ``found`` validates better, and the choice with
-    the scales searched was validated (``kept``: and it validates better)."""
+    the scales searched was validated (``kept``: and it validates better); ``noise``:
+    the velocities' noise that set the scales' smallest, ``noise_floor`` times it
+    (:meth:`ScreenedTerms.at_noise`; None: the terms' own smallest)."""
 
     found: TorqueModel
     without: CrossValidation
     with_found: CrossValidation
     passed: bool
     kept: bool = False
+    noise: float | None = None
+    noise_floor: float | None = None
+
+    def smallest(self) -> float:
+        """The smallest scale searched (the lower end of the screened terms' box)."""
+        return min(self.found.terms[i].search_bounds()[0]  # type: ignore[attr-defined]
+                   for i, _ in self.found.nonlinear()
+                   if self.found.terms[i].fitted)  # type: ignore[attr-defined]
 
     def scales(self) -> dict[str, float]:
         """The scales found, by name."""
@@ -131,7 +183,10 @@ class Screen:
         then = (f"lower {rule}, so validated with them searched in each split (the last "
                 f"row): " + ("lower again, kept" if self.kept else "not lower, not kept")
                 if self.passed else f"not lower {rule}, not tried further")
-        return (f"scales searched where they validate better: on all the data, every "
+        why = ("the terms' own" if self.noise is None else
+               f"{self.noise_floor:g} x the velocities' noise, {self.noise:.2g} {unit}")
+        return (f"scales searched where they validate better, from {self.smallest():.2g} "
+                f"{unit} up ({why}): on all the data, every "
                 f"other searched value held, {found} {unit}; validated with every "
                 f"searched value held, {self.with_found.score:.4f} +- "
                 f"{self.with_found.standard_error:.4f} against the choice's "
@@ -142,7 +197,8 @@ class Screen:
                 "held_fold_scores": self.without.fold_scores.tolist(),
                 "screened_score": self.with_found.score,
                 "screened_fold_scores": self.with_found.fold_scores.tolist(),
-                "passed": self.passed, "kept": self.kept, "line": self.line()}
+                "passed": self.passed, "kept": self.kept, "smallest": self.smallest(),
+                "noise": self.noise, "noise_floor": self.noise_floor, "line": self.line()}
 
 
 def screen_seconds(screened: ScreenedTerms, estimator: Estimator, model: TorqueModel,
@@ -185,7 +241,8 @@ def with_screened(screened: ScreenedTerms, index: int, tried: list, options: lis
                                              fits.after(f"{label}: {what}", each))
                            for m, what in ((held, "held"), (found, "scales held")))
     if DEFAULT.not_worse(without, with_found):
-        return index, Screen(found, without, with_found, False)
+        return index, Screen(found, without, with_found, False, noise=screened.noise,
+                             noise_floor=screened.noise_floor)
     searched = screened.searched(model, found)
     assert searched is not None
     checked_estimator(estimator).check(searched, limits)
@@ -196,4 +253,5 @@ def with_screened(screened: ScreenedTerms, index: int, tried: list, options: lis
                       f"{estimator.name}, {searched.friction} (kept where better)", each))))
     options.append((estimator, searched))
     kept = not DEFAULT.not_worse(tried[index][1], tried[-1][1])
-    return (len(tried) - 1 if kept else index), Screen(found, without, with_found, True, kept)
+    return (len(tried) - 1 if kept else index), Screen(
+        found, without, with_found, True, kept, screened.noise, screened.noise_floor)

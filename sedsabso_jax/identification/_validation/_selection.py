@@ -39,7 +39,7 @@ from .._model._candidates import candidate_models
 from .._model._checks import model_of
 from .._model._torque_model import TorqueModel
 from .._options import one_or_more
-from .._recordings import Data
+from .._recordings import Data, recordings_of
 from .._work import parts
 from ._cross_validation import TIE_FRACTION as TIE_FRACTION
 from ._cross_validation import CrossValidation as CrossValidation
@@ -211,6 +211,8 @@ def select_model(robot: Robot, data: Data, *,
     if limits is None:
         estimators = tuple(e for e in estimators if not checked_estimator(e).needs_limits)
     prepared = Prepared.of(robot, data, validation)
+    if screened is not None:  # their scales' smallest from the velocities' noise
+        screened = screened.at_noise(recordings_of(robot, data))
     models = candidate_models(robot) if models is None else tuple(
         model_of(robot, m) for m in one_or_more(models, TorqueModel))
     if not models or not estimators:
