@@ -26,7 +26,7 @@ def test_the_screened_model_searches_the_scales_from_the_values_given():
     robot = sj.robots.rs010n()
     at_rest = sj.Presliding(fitted=True, largest=0.02)
     model = sj.TorqueModel.of(robot, terms=(sj.Offset(), sj.SmoothCoulomb(), at_rest))
-    screened = sj.SmoothCoulomb(fitted=True, smallest=0.02)  # never sharper than 0.02 rad/s
+    screened = sj.SmoothCoulomb(fitted=True, smallest=0.02)  # where no noise is measured
     assert SCREENED_TERMS.terms == (screened,)
     searched = SCREENED_TERMS.searched(model)
     assert searched.terms == (sj.Offset(), screened, at_rest)
