@@ -39,6 +39,7 @@ def partition(model: Any) -> tuple[Any, Any]:
         raise TypeError(f"terms {own} place their searched values themselves "
                         f"(with_nonlinear): partition needs the field that holds them "
                         f"(Nonlinear(..., field=NAME) from nonlinear(model))")
+
     def fields(m: Any) -> tuple:
         return tuple(getattr(m.terms[i], f.field) for i, f in found)
 
