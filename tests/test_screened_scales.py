@@ -94,6 +94,18 @@ def test_the_velocities_noise_of_a_split_is_its_recordings():
     assert SCREENED_TERMS.at_noise([part]).noise == pytest.approx(whole.max(), rel=0.1)
 
 
+@pytest.mark.parametrize("args, match", [
+    ((np.arange(100) / 100.0, np.zeros(100)), r"q must be \(T, n\) finite"),
+    ((np.arange(50) / 100.0, np.zeros((100, 2))), r"times must be \(100,\) increasing"),
+    ((-np.arange(100) / 100.0, np.zeros((100, 2))), r"times must be \(100,\) increasing"),
+    ((np.arange(100) / 100.0, np.full((100, 2), np.nan)), "with NaN or inf"),
+    ((np.arange(100) / 100.0, np.zeros((100, 2)), 80.0), r"cutoff_hz must lie in \(0, 50\)"),
+])
+def test_the_velocities_noise_names_bad_input(args, match):
+    with pytest.raises(ValueError, match=match):
+        sj.measurements.velocity_noise(*args)
+
+
 def test_the_velocities_noise_follows_the_recordings_chain():
     """Velocities derived at 5 Hz carry less of the positions' noise than at 10 Hz (about
     2^1.5 less, the derivative's gain growing with the frequency): the floor reads each

@@ -124,12 +124,19 @@ def position_noise(q: Float[ArrayLike, "T n"],
     times its variance, so the noise is ``1.4826 MAD(d4 q) / sqrt(70)`` (the median
     absolute deviation's consistency factor for a normal distribution). With ``times``,
     differences only within stretches without a gap (a step above 1.5 median steps: a
-    split's samples)."""
+    split's samples). A ValueError names positions that are not ``(T, n)`` finite numbers,
+    or times that are not ``(T,)`` increasing."""
     q = np.asarray(q, dtype=float)
+    if q.ndim != 2 or not np.all(np.isfinite(q)):
+        raise ValueError(f"position_noise: q must be (T, n) finite positions, got shape "
+                         f"{q.shape}" + ("" if q.ndim != 2 else " with NaN or inf"))
     if times is None:
         d4 = np.diff(q, 4, axis=0)
     else:
         step = np.diff(np.asarray(times, dtype=float))
+        if np.shape(times) != q.shape[:1] or not np.all(step > 0):
+            raise ValueError(f"position_noise: times must be {q.shape[:1]} increasing time "
+                             f"stamps, one per position, got shape {np.shape(times)}")
         cuts = np.flatnonzero(step > 1.5 * np.median(step)) + 1
         d4 = np.concatenate([np.diff(part, 4, axis=0) for part in np.split(q, cuts)
                              if len(part) > 4] or [np.zeros((0, q.shape[1]))])
@@ -146,11 +153,12 @@ def velocity_noise(times: Float[ArrayLike, " T"], q: Float[ArrayLike, "T n"],
     noise at the same median rate (a fixed draw of at least 4000 samples or 50 cutoff
     periods, its middle half: the filter's ends ring). A ValueError where the cutoff is
     not below half the rate, as :func:`differentiate`'s."""
+    noise = position_noise(q, times)  # checks the positions and times first
     rate = median_rate(times)
-    n = int(max(4000, 50 * rate / cutoff_hz))
+    n = int(max(4000, 50 * rate / check_cutoff(cutoff_hz, rate, "velocity_noise")))
     white = np.random.default_rng(0).standard_normal((n, 1))
     qd, _ = differentiate(np.arange(n) / rate, white, cutoff_hz, source="velocity_noise")
-    return position_noise(q, times) * float(np.std(qd[n // 4:3 * n // 4]))
+    return noise * float(np.std(qd[n // 4:3 * n // 4]))
 
 
 def describe_signals(info: dict | None) -> str:
