@@ -91,3 +91,24 @@ def test_a_scale_term_declares_its_scale_field():
     with pytest.raises(TypeError, match=r"Undeclared must declare one scale field with "
                                         r"scale\(\.\.\.\), found 0"):
         Undeclared()
+
+
+def test_which_columns_a_term_keeps_does_not_depend_on_the_values_it_reads():
+    """The load term reads the model's rigid-body values; whether the base spans its
+    columns is found at a random point of them (no probe in the terms' signals): a zero
+    load (columns of zeros), a unit load, the robot's own and a found one keep the same
+    columns, every one of the term's."""
+    robot = sj.robots.rs010n()
+    waiting = sj.TorqueModel.of(robot, sj.LoadFriction(viscous=True))
+    size = len(waiting.rigid_columns)
+    assert waiting.regrouped == ()
+    for point in (np.zeros(size), np.ones(size),
+                  np.random.default_rng(5).standard_normal(size)):
+        model = sj.TorqueModel.of(robot, sj.LoadFriction(viscous=True, load_point=point),
+                                  base=waiting.base)
+        np.testing.assert_array_equal(model.kept, waiting.kept)
+        assert model.names == waiting.names
+    zero = sj.TorqueModel.of(robot, sj.LoadFriction(load_point=np.zeros(size)),
+                             base=waiting.base)
+    q = np.random.default_rng(0).standard_normal((4, robot.n_joints))
+    assert not np.any(zero.regressor(q, q, q)[..., -robot.n_joints:])  # yet kept

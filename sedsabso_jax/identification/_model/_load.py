@@ -95,7 +95,7 @@ class LoadFriction(AbstractTerm):
     def columns(self, model: ModelView, s: Signals) -> Any:
         n = model.robot.n_joints
         point: Any
-        if self.load_point is None and s.probe is None:  # not fitted: the robot's own
+        if self.load_point is None:  # not fitted: the robot's own
             point = model.rigid_values(model.prior_values)
         else:  # floats, or a search's traced values
             point = self.load_point

@@ -7,6 +7,7 @@ deviation), not dropped."""
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 from typing import Any
 
 import jax
@@ -24,7 +25,8 @@ def kept_columns(model: Any) -> np.ndarray:
     """Indices of the extra columns of ``model`` (a :class:`~._torque_model.TorqueModel`)
     that the base regressor does not span: scaled columns at random states, ordered QR
     (as :func:`~sedsabso_jax.base_parameters`); kept per model structure and values
-    (its base, recordings, transmission and terms, every field of each). A model whose
+    (its base, recordings, transmission and terms, every field of each but the values
+    they read of a fit, taken at random: :func:`read_at_random`). A model whose
     searched values are traced (:meth:`~._torque_model.TorqueModel.partition`) is taken
     with them at 1: which columns the base spans follows from the terms' kinds and fixed
     values, not from a scale's value."""
@@ -32,6 +34,7 @@ def kept_columns(model: Any) -> np.ndarray:
     if traced:
         model = jax.tree_util.tree_map(
             lambda x: np.ones(x.shape) if isinstance(x, jax.core.Tracer) else x, model)
+    model = read_at_random(model)
     key = model.structure
     if key not in _KEPT:
         if len(_KEPT) >= KEEP:
@@ -39,6 +42,17 @@ def kept_columns(model: Any) -> np.ndarray:
         with jax.ensure_compile_time_eval() if traced else contextlib.nullcontext():
             _KEPT[key] = _independent(model)  # concrete, inside jax.jit too
     return _KEPT[key]
+
+
+def read_at_random(model: Any) -> Any:
+    """``model`` with the values its terms read of a fit
+    (:attr:`~._term.AbstractTerm.read_fields`: values of the rigid-body columns) at a
+    random point: which of their columns the base spans must not depend on them."""
+    size = len(model.rigid_columns) + sum(len(t.names(model)) for t in model.terms if t.body)
+    point = tuple(np.random.default_rng(2).standard_normal(size).tolist())
+    terms = tuple(dataclasses.replace(t, **dict.fromkeys(t.read_fields, point))
+                  if t.read_fields else t for t in model.terms)
+    return dataclasses.replace(model, terms=terms)
 
 
 def _independent(model: Any) -> np.ndarray:
@@ -49,11 +63,7 @@ def _independent(model: Any) -> np.ndarray:
     q, qd, qdd = random_states(robot, max(50, -(-4 * robot.n_params // robot.n_joints)),
                                seed=1)
     recording = np.random.default_rng(1).integers(0, model.recordings, q.shape[0])
-    # a random torque for terms that read the model's own: which of their columns the
-    # base spans must not depend on the values they read
-    probe = np.random.default_rng(2).standard_normal(q.shape)
-    Y = model._full_regressor(q, qd, qdd, recording if model.recordings > 1 else None,
-                              probe=probe)
+    Y = model._full_regressor(q, qd, qdd, recording if model.recordings > 1 else None)
     W = Y.reshape(-1, Y.shape[-1])
     W = W / np.where(np.linalg.norm(W, axis=0) > 0, np.linalg.norm(W, axis=0), 1.0)
     d = np.abs(np.diag(np.linalg.qr(W, mode="r")))

@@ -66,9 +66,7 @@ class Signals:
 
     ``rigid``: the rows of the model's rigid-body columns (the base columns but each
     joint's viscous and Coulomb friction, then the columns of terms that are bodies),
-    ``(..., n, r)``, where a term reads the model's own torque; ``probe``: a torque to
-    read instead (the model's random states, where it finds which columns the base
-    spans).
+    ``(..., n, r)``, where a term reads the model's own torque.
 
     The samples are whole recordings in time order (a validation split takes its rows of
     the columns), so a term's state integrates along them; ``steps``: their
@@ -80,7 +78,6 @@ class Signals:
     recording: Any
     coulomb: Any
     rigid: Any = None
-    probe: np.ndarray | None = None
     steps: tuple | None = None
 
     @property
@@ -95,10 +92,7 @@ class Signals:
 
     def rigid_torque(self, values: np.ndarray) -> np.ndarray:
         """The model's rigid-body torque ``(..., n)`` with the rigid-body columns'
-        ``values`` (:meth:`~._torque_model.TorqueModel.rigid_values`; the probe's torque
-        where there is one)."""
-        if self.probe is not None:
-            return self.probe
+        ``values`` (:meth:`~._torque_model.TorqueModel.rigid_values`)."""
         if self.rigid is None:
             raise ValueError("these signals carry no rigid-body rows")
         if isinstance(self.rigid, np.ndarray):  # measured rows: no copy into JAX

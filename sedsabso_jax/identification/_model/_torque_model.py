@@ -269,14 +269,14 @@ class TorqueModel(eqx.Module):
             start += size
         return np.concatenate(out)
 
-    def signals(self, q, qd, qdd, recording=None, base_rows=None, *, probe=None,
+    def signals(self, q, qd, qdd, recording=None, base_rows=None, *,
                 steps=None) -> Signals:
         """What the terms' columns read at these samples (:class:`~._term.Signals`):
         the model's Coulomb shape; ``base_rows`` the base regressor
         (the rigid-body rows are its columns but friction, then the columns of the terms
         that are bodies); ``steps``: the samples' increments, computed before."""
         coulomb, _ = self.coulomb(qd)
-        s = Signals(q, qd, qdd, recording, coulomb, None, probe, steps)
+        s = Signals(q, qd, qdd, recording, coulomb, None, steps)
         if base_rows is None:
             return s
         take = np.take if isinstance(base_rows, np.ndarray) else jnp.take  # np: no copy
@@ -286,7 +286,7 @@ class TorqueModel(eqx.Module):
             rigid = jnp.concatenate([rigid, *bodies], -1)
         return dataclasses.replace(s, rigid=rigid)
 
-    def _full_regressor(self, q, qd, qdd, recording=None, base_rows=None, probe=None,
+    def _full_regressor(self, q, qd, qdd, recording=None, base_rows=None,
                         rows=None) -> np.ndarray:
         q, qd, qdd = (np.asarray(a, dtype=float) for a in (q, qd, qdd))
         Y = self.base.regressor(q, qd, qdd) if base_rows is None else base_rows
@@ -298,7 +298,7 @@ class TorqueModel(eqx.Module):
         n = self.robot.n_joints
         batch = Y.shape[:-2]
         q, qd, qdd = (np.broadcast_to(a, batch + (n,)) for a in (q, qd, qdd))
-        s = self.signals(q, qd, qdd, recording, Y, probe=probe)
+        s = self.signals(q, qd, qdd, recording, Y)
         mask = None if rows is None else np.asarray(rows)
         if mask is not None and (mask.dtype != bool or mask.shape != batch[:1]):
             raise ValueError(f"rows must be {batch[:1]} booleans, got {mask.dtype} {mask.shape}")
@@ -385,5 +385,5 @@ class TorqueModel(eqx.Module):
         if all(a is b for a, b in zip(terms, self.terms)):
             return self
         read = dataclasses.replace(self, terms=terms)
-        read.__dict__["kept"] = self.kept  # found with a probe torque, not the values read
+        read.__dict__["kept"] = self.kept  # found at random values read (kept_columns)
         return read

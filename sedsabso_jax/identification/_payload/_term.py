@@ -88,9 +88,7 @@ class PayloadInertia(AbstractTerm):
         A = frame_map(np.asarray(self.frame).reshape(4, 4))
         Y = np.asarray(regressor(model.robot, np.asarray(s.q), np.asarray(s.qd),
                                  np.asarray(s.qdd)))[..., k:k + 10] @ A
-        if s.probe is not None:  # the model's random states: half of them carry it, as
-            on = np.asarray(s.probe)[..., 0] > 0  # recordings with and without it do
-        elif s.recording is None:
+        if s.recording is None:
             return Y
         else:
             on = np.isin(np.asarray(s.recording), np.asarray(self.carried, dtype=int))
