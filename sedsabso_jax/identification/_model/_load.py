@@ -2,7 +2,6 @@
 term whose columns read the model's own fitted values."""
 
 # no `from __future__ import annotations`: equinox reads the AbstractVar annotations
-import dataclasses
 from typing import Any, ClassVar
 
 import equinox as eqx
@@ -54,16 +53,8 @@ class LoadFriction(AbstractTerm):
                 + ", s/rad for viscous friction growing with the load FLV" * self.viscous)
 
     @property
-    def waiting(self) -> bool:
-        return self.load_point is None
-
-    @property
     def iterates(self) -> bool:
         return self.fixed_point
-
-    def reading(self, model: ModelView, values: Any) -> AbstractTerm:
-        rigid = model.rigid_values(np.asarray(values, dtype=float))
-        return dataclasses.replace(self, load_point=tuple(float(v) for v in rigid))
 
     def read_line(self, step: dict) -> str:
         if "settled" in step:

@@ -156,9 +156,11 @@ class AbstractTerm(eqx.Module):
 
     name: eqx.AbstractClassVar[str]
     nonnegative: eqx.AbstractClassVar[bool]
-    #: The fields holding values read of a fit (not the term's structure), None until
-    #: read: a search takes them as its compiled call's arguments, so that one
-    #: compilation serves the fits of every split (:class:`~.._fit._projection.Projection`).
+    #: The fields holding values read of a fit, the model's rigid-body values
+    #: (:meth:`~._torque_model.TorqueModel.rigid_values`), None until read (the term
+    #: :attr:`waiting`; :meth:`reading` fills them): a search takes them as its compiled
+    #: call's arguments, so that one compilation serves the fits of every split
+    #: (:class:`~.._fit._projection.Projection`).
     read_fields: ClassVar[tuple[str, ...]] = ()
 
     @abc.abstractmethod
@@ -214,9 +216,10 @@ class AbstractTerm(eqx.Module):
 
     @property
     def waiting(self) -> bool:
-        """Whether the columns read the model's own fitted values and have none yet: the
-        fit first fits the model without the waiting terms and gives them its values."""
-        return False
+        """Whether the columns read the model's own fitted values and have none yet (a
+        :attr:`read_fields` None): the fit first fits the model without the waiting terms
+        and gives them its values."""
+        return any(getattr(self, field) is None for field in self.read_fields)
 
     @property
     def iterates(self) -> bool:
@@ -225,9 +228,12 @@ class AbstractTerm(eqx.Module):
         return False
 
     def reading(self, model: ModelView, values: Any) -> "AbstractTerm":
-        """The term reading the model's fitted ``values`` (the base values first);
-        itself for a term that reads none."""
-        return self
+        """The term reading the model's fitted ``values`` (the base values first): its
+        :attr:`read_fields` at their rigid-body values; itself for a term that reads none."""
+        if not self.read_fields:
+            return self
+        rigid = tuple(float(v) for v in model.rigid_values(np.asarray(values, dtype=float)))
+        return dataclasses.replace(self, **dict.fromkeys(self.read_fields, rigid))
 
     def read_line(self, step: dict) -> str:
         """A report's line on what the term read of the fit (``step``: the fit's record
