@@ -135,6 +135,28 @@ def test_the_floor_falls_back_to_the_terms_own_where_the_noise_is_not_given():
         ScreenedTerms(sj.SmoothCoulomb(fitted=True), noise_floor=0)
 
 
+def test_the_screens_line_names_what_set_the_smallest_scale():
+    """The floor (6 x the noise); the terms' own lower bound where the floor lies below
+    it; the top of their box where it lies above."""
+    from types import SimpleNamespace
+
+    from sedsabso_jax.identification._validation._screened_terms import Screen
+
+    robot = sj.robots.rs010n()
+    cv = SimpleNamespace(score=1.0, standard_error=0.1)
+
+    def line(smallest: float, noise: float | None) -> str:
+        found = sj.TorqueModel.of(robot, sj.SmoothCoulomb(fitted=True, smallest=smallest))
+        return Screen(found, cv, cv, False, noise=noise, noise_floor=6.0).line()
+
+    assert "from 0.006 rad/s up (6 x the velocities' noise, 0.001 rad/s)" in line(6e-3, 1e-3)
+    assert ("from 0.0001 rad/s up (the terms' own lower bound, above 6 x the velocities' "
+            "noise, 1e-09 rad/s)") in line(1e-4, 1e-9)
+    assert ("from 1 rad/s up (just below the terms' upper bound: 6 x the velocities' "
+            "noise, 0.5 rad/s lies above it)") in line(float(np.nextafter(1.0, 0)), 0.5)
+    assert "from 0.02 rad/s up (the terms' own)" in line(0.02, None)
+
+
 def test_the_smallest_scale_searched_is_the_terms_option():
     term = parse_friction("smooth:fit:0.02")[0]
     assert term == sj.SmoothCoulomb(fitted=True, smallest=0.02)
@@ -206,6 +228,9 @@ def test_a_sharp_jump_is_kept_where_the_positions_are_clean(tmp_path):
     without = _identify(paths, tmp_path / "without.json", "--no-searched-scales")
     screen = doc["cross_validation"]["selection"]["screen"]
     assert screen["smallest"] == 1e-4 and screen["noise"] < 1e-5
+    # the line names what set the smallest: the terms' own bound, not 6 x the noise
+    assert ("from 0.0001 rad/s up (the terms' own lower bound, above 6 x the velocities' "
+            "noise, ") in screen["line"]
     assert screen["passed"] and screen["kept"]
     assert 0.002 / 3 < screen["scales"]["v_smooth2"] < 0.002 * 3
     assert (doc["validation"]["relative_rms_percent_overall"]
@@ -220,6 +245,7 @@ def test_a_sharp_jump_is_not_searched_below_the_velocities_noise(tmp_path):
     selection = doc["cross_validation"]["selection"]
     screen = selection["screen"]
     assert 0.01 < screen["smallest"] == pytest.approx(6 * screen["noise"])
+    assert f"rad/s up (6 x the velocities' noise, {screen['noise']:.2g} rad/s)" in screen["line"]
     assert min(screen["scales"].values()) >= screen["smallest"]
     assert not screen["passed"] and not screen["kept"]
     assert "smooth:fit" not in doc["settings"]["friction"]
