@@ -7,6 +7,7 @@ import os
 from typing import Any, ClassVar
 
 import equinox as eqx
+import jax.numpy as jnp
 import numpy as np
 
 from ...dynamics._inertia import transform_params
@@ -86,13 +87,11 @@ class PayloadInertia(AbstractTerm):
     def columns(self, model: ModelView, s: Signals) -> Any:
         k = N_LINK_PARAMETERS * self.link
         A = frame_map(np.asarray(self.frame).reshape(4, 4))
-        Y = np.asarray(regressor(model.robot, np.asarray(s.q), np.asarray(s.qd),
-                                 np.asarray(s.qdd)))[..., k:k + 10] @ A
+        Y = regressor(model.robot, s.q, s.qd, s.qdd)[..., k:k + 10] @ A
         if s.recording is None:
             return Y
-        else:
-            on = np.isin(np.asarray(s.recording), np.asarray(self.carried, dtype=int))
-        return np.where(on[..., None, None], Y, 0.0)
+        on = jnp.isin(jnp.asarray(s.recording), jnp.asarray(self.carried, dtype=int))
+        return jnp.where(on[..., None, None], Y, 0.0)
 
     def settings(self) -> dict:
         return {"payload_link": self.link, "payload_carried": list(self.carried)}
