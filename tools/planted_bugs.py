@@ -319,8 +319,8 @@ BUGS = [
      "    if False:\n", "load friction's first stage skipped (the prior's load kept)",
      FRICTION, None),
     ("identification/_payload/_term.py",
-     "            on = np.isin(np.asarray(s.recording), np.asarray(self.carried, dtype=int))",
-     "            on = ~np.isin(np.asarray(s.recording), np.asarray(self.carried, dtype=int))",
+     "        on = jnp.isin(jnp.asarray(s.recording), jnp.asarray(self.carried, dtype=int))",
+     "        on = ~jnp.isin(jnp.asarray(s.recording), jnp.asarray(self.carried, dtype=int))",
      "the payload on the unloaded recordings", PAYLOAD, None),
     ("identification/_estimators/_programme.py",
      "            np.ones(10 * nb), np.tile(-link[np.nonzero(link)], nb),",
@@ -332,9 +332,11 @@ BUGS = [
      "True for p in own", "an inconsistent payload taken as consistent (links free, robot given, "
      "gains)",
      PAYLOAD, None),
-    ("identification/_model/_load.py",
-     "        rigid = model.rigid_values(np.asarray(values, dtype=float))",
-     "        rigid = np.asarray(values, dtype=float)[:len(model.rigid_columns)]",
+    ("identification/_model/_term.py",
+     "        rigid = tuple(float(v) for v in model.rigid_values("
+     "np.asarray(values, dtype=float)))",
+     "        rigid = tuple(float(v) for v in np.asarray(values, dtype=float)"
+     "[:len(model.rigid_columns)])",
      "the load point read from the wrong columns", FRICTION, None),
     ("identification/_estimators/_estimator.py",
      "            if k + 1 < passes:", "            if k + 1 < 1:",
