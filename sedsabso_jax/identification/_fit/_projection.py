@@ -114,7 +114,6 @@ class Projection(eqx.Module):
     qd: Float[Array, "T n"]
     qdd: Float[Array, "T n"]
     recording: Array | None
-    steps: tuple
     rigid: Array | None
     weights: Float[Array, " n"]
     mask: Float[Array, " T"]
@@ -174,8 +173,8 @@ class Projection(eqx.Module):
         AtA, Atb = M.T @ M, M.T @ b.reshape(-1)
         P = np.linalg.inv(AtA + RIDGE * np.max(np.diag(AtA)) * np.eye(len(AtA)))
         PAtb = P @ Atb
-        q, qd, qdd, recording, steps, rigid = shared
-        return cls(q=q, qd=qd, qdd=qdd, recording=recording, steps=steps, rigid=rigid,
+        q, qd, qdd, recording, rigid = shared
+        return cls(q=q, qd=qd, qdd=qdd, recording=recording, rigid=rigid,
                    weights=jnp.asarray(w), mask=jnp.asarray(mask),
                    A_rows=tuple(jnp.asarray(A[:, j][:, list(cols)])
                                 for j, cols in recipe.rows),
@@ -192,8 +191,7 @@ class Projection(eqx.Module):
         model = r.with_read(self.read).with_nonlinear(jnp.exp(u))
         n = model.robot.n_joints
         coulomb, _ = model.coulomb(self.qd)
-        s = Signals(self.q, self.qd, self.qdd, self.recording, coulomb, self.rigid,
-                    steps=self.steps)
+        s = Signals(self.q, self.qd, self.qdd, self.recording, coulomb, self.rigid)
         blocks = [diagonal(coulomb, n)] if r.coulomb else []
         blocks += [jnp.asarray(model.terms[i].columns(model, s)) for i in r.terms]
         C = jnp.concatenate(blocks, -1)
@@ -279,12 +277,12 @@ def _moved(model: TorqueModel, Y0: np.ndarray, shared: tuple) -> tuple[np.ndarra
     tie); a column reaches a joint's row where its value or its derivative is nonzero
     there."""
     u0 = np.log(np.concatenate([f.values for _, f in model.nonlinear()]))
-    q, qd, qdd, recording, steps, rigid = shared
+    q, qd, qdd, recording, rigid = shared
 
     def columns(u):
         m = model.with_nonlinear(jnp.exp(u))
         coulomb, _ = m.coulomb(qd)
-        s = Signals(q, qd, qdd, recording, coulomb, rigid, steps=steps)
+        s = Signals(q, qd, qdd, recording, coulomb, rigid)
         return coulomb, [jnp.asarray(t.columns(m, s)) for t in m.terms]
 
     direction = np.random.default_rng(0).uniform(0.5, 1.5, u0.shape)
@@ -312,13 +310,11 @@ def fixed(model: TorqueModel, moved: np.ndarray) -> np.ndarray:
 
 def _signals(model: TorqueModel, root: Samples) -> tuple:
     """The whole recordings' signals a trial's columns read, as JAX arrays: positions,
-    velocities, accelerations, recordings, increments, rigid-body rows."""
+    velocities, accelerations, recordings, rigid-body rows."""
     rigid = model.signals(root.q, root.qd, root.qdd, root.recording,
                           root.base_rows(model)).rigid
-    steps = Signals(root.q, root.qd, root.qdd, root.recording, None).increments()
     return (jnp.asarray(root.q), jnp.asarray(root.qd), jnp.asarray(root.qdd),
             None if root.recording is None else jnp.asarray(root.recording),
-            tuple(jnp.asarray(a) for a in steps),
             None if rigid is None else jnp.asarray(rigid))
 
 

@@ -41,7 +41,6 @@ import functools
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jax import lax
 from jaxtyping import Array, ArrayLike, Bool, Float
 
@@ -52,26 +51,24 @@ SEQUENTIAL = ("cpu",)
 
 
 def increments(q: Float[ArrayLike, "T n"], recording: ArrayLike | None = None
-               ) -> tuple[Float[np.ndarray, "T n"], Bool[np.ndarray, " T"]]:
+               ) -> tuple[Float[Array, "T n"], Bool[Array, " T"]]:
     """The position increments ``dq_k = q_k - q_{k-1}`` (``(T, n)``, 0 at a recording's
     first sample) and where each recording starts (``(T,)``): at sample 0 and wherever
-    ``recording`` (each sample's recording, ``(T,)``; None: one recording) changes."""
-    q = np.asarray(q, dtype=float)
+    ``recording`` (each sample's recording, ``(T,)``; None: one recording) changes.
+    Computed with ``jax.numpy`` (traced positions too: a compiled search's)."""
+    q = jnp.asarray(q)
     if q.ndim != 2:
         raise ValueError(f"the presliding state needs positions (samples, joints) in time "
                          f"order, got shape {q.shape}")
-    start = np.zeros(q.shape[0], dtype=bool)
-    start[:1] = True
+    start = jnp.arange(q.shape[0]) == 0
     if recording is not None:
-        index = np.asarray(recording)
+        index = jnp.asarray(recording)
         if index.shape != q.shape[:1]:
             raise ValueError(f"recording must hold one value per sample {q.shape[:1]}, got "
                              f"shape {index.shape}")
-        start[1:] |= index[1:] != index[:-1]
-    dq = np.zeros_like(q)
-    dq[1:] = np.diff(q, axis=0)
-    dq[start] = 0.0
-    return dq, start
+        start = start | jnp.concatenate([start[:1] & False, index[1:] != index[:-1]])
+    dq = q - jnp.concatenate([q[:1], q[:-1]])
+    return jnp.where(start[:, None], 0.0, dq), start
 
 
 def _steps(dq, start, q_c):

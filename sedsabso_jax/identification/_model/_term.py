@@ -69,8 +69,7 @@ class Signals:
     ``(..., n, r)``, where a term reads the model's own torque.
 
     The samples are whole recordings in time order (a validation split takes its rows of
-    the columns), so a term's state integrates along them; ``steps``: their
-    :meth:`increments`, computed before (a compiled search's)."""
+    the columns), so a term's state integrates along them (:meth:`increments`)."""
 
     q: Any
     qd: Any
@@ -78,7 +77,6 @@ class Signals:
     recording: Any
     coulomb: Any
     rigid: Any = None
-    steps: tuple | None = None
 
     @property
     def batch(self) -> tuple[int, ...]:
@@ -100,13 +98,11 @@ class Signals:
             return (rows @ np.asarray(values, dtype=float)).reshape(self.rigid.shape[:-1])
         return self.rigid @ jnp.asarray(values)
 
-    def increments(self) -> tuple[np.ndarray, np.ndarray]:
+    def increments(self) -> tuple[Any, Any]:
         """Each sample's position increment from the previous one in its recording
         (``(T, n)``, 0 at a recording's start) and where each recording starts
-        (``(T,)``), over the whole recordings (time order)."""
-        if self.steps is not None:
-            return self.steps
-        return increments(np.asarray(self.q), self.recording)
+        (``(T,)``), over the whole recordings (time order): :func:`~._dahl.increments`."""
+        return increments(self.q, self.recording)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

@@ -269,14 +269,13 @@ class TorqueModel(eqx.Module):
             start += size
         return np.concatenate(out)
 
-    def signals(self, q, qd, qdd, recording=None, base_rows=None, *,
-                steps=None) -> Signals:
+    def signals(self, q, qd, qdd, recording=None, base_rows=None) -> Signals:
         """What the terms' columns read at these samples (:class:`~._term.Signals`):
         the model's Coulomb shape; ``base_rows`` the base regressor
         (the rigid-body rows are its columns but friction, then the columns of the terms
-        that are bodies); ``steps``: the samples' increments, computed before."""
+        that are bodies)."""
         coulomb, _ = self.coulomb(qd)
-        s = Signals(q, qd, qdd, recording, coulomb, None, steps)
+        s = Signals(q, qd, qdd, recording, coulomb)
         if base_rows is None:
             return s
         take = np.take if isinstance(base_rows, np.ndarray) else jnp.take  # np: no copy
