@@ -274,7 +274,8 @@ BUGS = [
     ("identification/_model/_dahl.py", "z = s + (z - s) * jnp.exp(-jnp.abs(d) / q_c)",
      "z = s + (z - s) * jnp.exp(-(jnp.abs(d) + 1e-4) / q_c)",
      "the presliding state decays at rest", STATE, None),
-    ("identification/_model/_dahl.py", "        start[1:] |= index[1:] != index[:-1]\n",
+    ("identification/_model/_dahl.py",
+     "        start = start | jnp.concatenate([start[:1] & False, index[1:] != index[:-1]])\n",
      "", "the presliding state carried over from one recording to the next", STATE, None),
     ("identification/_fit/_samples.py",
      "        root, mask = self.root, self.mask\n",
@@ -799,6 +800,10 @@ BUGS = [
      "            why = (noise if True else",
      "the screen's line credits the noise with a smallest scale the box set",
      ["tests/test_screened_scales.py"], None),
+    ("identification/_model/_dahl.py",
+     "    return jnp.where(start[:, None], 0.0, dq), start",
+     "    return dq, start", "the presliding state carried across a recording's start",
+     ["tests/test_friction_state.py"], None),
 ]
 
 
