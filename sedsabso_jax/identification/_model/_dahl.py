@@ -66,8 +66,8 @@ def increments(q: Float[ArrayLike, "T n"], recording: ArrayLike | None = None
         if index.shape != q.shape[:1]:
             raise ValueError(f"recording must hold one value per sample {q.shape[:1]}, got "
                              f"shape {index.shape}")
-        start = start | jnp.concatenate([start[:1] & False, index[1:] != index[:-1]])
-    dq = q - jnp.concatenate([q[:1], q[:-1]])
+        start = start.at[1:].set(index[1:] != index[:-1])
+    dq = q - jnp.concatenate([q[:1], q[:-1]])  # 0 at the first sample
     return jnp.where(start[:, None], 0.0, dq), start
 
 

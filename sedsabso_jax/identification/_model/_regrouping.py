@@ -48,6 +48,8 @@ def read_at_random(model: Any) -> Any:
     """``model`` with the values its terms read of a fit
     (:attr:`~._term.AbstractTerm.read_fields`: values of the rigid-body columns) at a
     random point: which of their columns the base spans must not depend on them."""
+    if not any(t.read_fields for t in model.terms):
+        return model
     size = len(model.rigid_columns) + sum(len(t.names(model)) for t in model.terms if t.body)
     point = tuple(np.random.default_rng(2).standard_normal(size).tolist())
     terms = tuple(dataclasses.replace(t, **dict.fromkeys(t.read_fields, point))

@@ -90,7 +90,7 @@ class PayloadInertia(AbstractTerm):
         Y = regressor(model.robot, s.q, s.qd, s.qdd)[..., k:k + 10] @ A
         if s.recording is None:
             return Y
-        on = jnp.isin(jnp.asarray(s.recording), jnp.asarray(self.carried, dtype=int))
+        on = jnp.isin(jnp.asarray(s.recording), np.asarray(self.carried, dtype=int))
         return jnp.where(on[..., None, None], Y, 0.0)
 
     def settings(self) -> dict:
