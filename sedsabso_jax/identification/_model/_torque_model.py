@@ -384,5 +384,5 @@ class TorqueModel(eqx.Module):
         if all(a is b for a, b in zip(terms, self.terms)):
             return self
         read = dataclasses.replace(self, terms=terms)
-        read.__dict__["kept"] = self.kept  # found at random values read (kept_columns)
+        read.__dict__["kept"] = self.kept  # the same (kept_columns reads no value read)
         return read

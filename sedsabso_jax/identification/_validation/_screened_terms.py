@@ -183,16 +183,16 @@ class Screen:
         then = (f"lower {rule}, so validated with them searched in each split (the last "
                 f"row): " + ("lower again, kept" if self.kept else "not lower, not kept")
                 if self.passed else f"not lower {rule}, not tried further")
+        smallest = self.smallest()
         if self.noise is None:
             why = "the terms' own"
         else:  # the floor, or the end of the terms' box where the floor lies outside it
             floor = self.noise_floor * self.noise  # type: ignore[operator]
             noise = f"{self.noise_floor:g} x the velocities' noise, {self.noise:.2g} {unit}"
-            smallest = self.smallest()
             why = (noise if abs(smallest - floor) <= 1e-9 * floor else
                    f"the terms' own lower bound, above {noise}" if smallest > floor else
                    f"just below the terms' upper bound: {noise} lies above it")
-        return (f"scales searched where they validate better, from {self.smallest():.2g} "
+        return (f"scales searched where they validate better, from {smallest:.2g} "
                 f"{unit} up ({why}): on all the data, every "
                 f"other searched value held, {found} {unit}; validated with every "
                 f"searched value held, {self.with_found.score:.4f} +- "
