@@ -136,6 +136,26 @@ def markdown_table(head: Sequence[str], rows: Sequence[Sequence[str]],
                     disable_numparse=True, colalign=list(align))
 
 
+def to_its_std(value: float, std: float) -> str:
+    """``value`` as a table prints it: rounded to the second significant digit of its
+    standard deviation ``std`` (``0.129`` for 0.128649 +- 0.0202, ``0.000`` for 7.5e-06 +-
+    0.017), so that the digits printed are those the data determine and the same on every
+    processor; in exponent form where that digit lies below 1e-6 and the value below
+    1e-3; every digit of a double where that digit is finer; to 6 significant digits
+    where ``std`` is not a positive finite number (``inf``: not determined)."""
+    if not (math.isfinite(value) and math.isfinite(std) and std > 0):
+        return f"{value:.6g}"
+    step = math.floor(math.log10(std)) - 1  # the std's second significant digit
+    if value != 0 and math.log10(abs(value)) - step > 16:  # finer than a double's digits
+        return f"{value:.17g}"
+    rounded = round(value / 10.0 ** step) * 10.0 ** step  # round(): an int, never -0
+    if step >= -6 or abs(rounded) >= 1e-3:
+        return f"{rounded:.{max(-step, 0)}f}"
+    if rounded == 0:
+        return "0"
+    return f"{rounded:.{math.floor(math.log10(abs(rounded))) - step}e}"
+
+
 def columns_note(*definitions: tuple[str | Sequence[str], str], width: int = 90) -> str:
     """The note under a table that defines its columns: ``"Columns: `a`: what a is; `b`,
     `c`: what b and c are."``, wrapped to ``width``. Each definition is ``(header or

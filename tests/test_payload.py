@@ -182,6 +182,10 @@ def test_static_poses_leave_the_inertia_undetermined(rs010n_runs):
     assert np.isnan(p.com[2]) and np.all(np.isnan(p.inertia))
     assert np.isinf(p.std["com"][2]) and np.all(np.isinf(p.std["inertia_com"]))
     assert "not determined" in p.text()
+    # the mass printed to its std's second significant digit, within half of it
+    mass = next(r for r in p.text().splitlines() if r.startswith("| mass"))
+    step = 10.0 ** (np.floor(np.log10(p.std["mass"])) - 1)
+    assert abs(float(mass.split("|")[2]) - p.mass) <= 0.5 * step + 4e-16 * p.mass, mass
 
 
 def test_consistent_estimate_kept_else_projected(rs010n_runs):

@@ -7,13 +7,16 @@ tabulate's) keeps its cells and stays a GitHub table."""
 
 from __future__ import annotations
 
+import math
 import re
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 import sedsabso_jax as sj
-from sedsabso_jax._output import columns_note, markdown_table
+from sedsabso_jax._output import columns_note, markdown_table, to_its_std
 from sedsabso_jax.compare._report import render
 from sedsabso_jax.identification._default._report import IdentificationReport
 from sedsabso_jax.identification._validation._cross_validation import CrossValidation
@@ -74,6 +77,31 @@ def test_markdown_table_keeps_cells_and_aligns_numbers():
         "| 1   | ZZ1R   |   0.0000 | a b    |",
         "| 12  | FV1    | -1.5e+06 |        |"]
     assert markdown_table(["a"], [["x"]], align=["right"]).splitlines()[1] == "|----:|"
+
+
+@pytest.mark.parametrize("value, std, printed", [
+    (0.128649, 0.0202, "0.129"), (3.46302, 0.00182, "3.4630"), (1234.5, 120.0, "1230"),
+    (7.51405e-06, 0.0172, "0.000"), (-0.0003, 0.0172, "0.000"), (-0.00080188, 0.0289, "-0.001"),
+    (3e-07, 1e-09, "3.000e-07"), (-2.5e-12, 1e-09, "0"), (1.23456789e-08, 2.3e-12, "1.23457e-08"),
+    (4.9999999999990115, 4.05e-14, "4.999999999999011"), (0.00123, 1e-9, "0.0012300000"),
+    (1e300, 1e-300, "1.0000000000000001e+300"),
+    (0.123456789, math.inf, "0.123457"), (0.123456789, 0.0, "0.123457")])
+def test_a_value_is_printed_to_its_stds_second_significant_digit(value, std, printed):
+    """What a report prints of a value: the digits its std leaves (no ``-0``); 6
+    significant digits where the std is ``inf`` (not determined) or 0."""
+    assert to_its_std(value, std) == printed
+
+
+@given(st.floats(-1e3, 1e3), st.floats(1e-11, 1e2))
+def test_a_printed_value_is_within_half_a_digit_and_the_same_on_another_processor(value, std):
+    """The printed value lies within half a unit of the std's second significant digit of
+    the value, and a change far below it (another processor's last bits) prints the same
+    but where the value lies within 1e-6 of that unit of a rounding boundary."""
+    step = 10.0 ** (math.floor(math.log10(std)) - 1)
+    printed = to_its_std(value, std)
+    assert abs(float(printed) - value) <= 0.5 * step * (1 + 1e-9) + 1e-12 * abs(value)
+    if abs(abs(value / step) % 1 - 0.5) > 1e-6:
+        assert to_its_std(value + 1e-8 * step, std) == printed
 
 
 def test_the_checker_finds_a_missing_definition():
@@ -170,4 +198,15 @@ def test_identify_report(limits):
     text = report.text()
     # the 7th: extrapolation, the 8th: rests
     assert len(_tables(text)) == 8 and undefined(text) == []
+    # each value to its std's second significant digit: within half of it (the std from
+    # noise-free data 1e-10 or less, so that 6 significant digits would lie farther), the
+    # std to 2 significant digits
+    rows = [r.split("|")[2:5] for r in text.splitlines() if re.match(r"\| \d+ +\|", r)]
+    assert [n.strip() for n, _, _ in rows] == list(ident.names)
+    std = np.asarray(ident.std)
+    assert 0 < std.max() < 1e-10
+    step = 10.0 ** (np.floor(np.log10(std)) - 1)
+    printed = np.array([float(v) for _, v, _ in rows])
+    assert np.all(np.abs(printed - ident.values) <= 0.5 * step * (1 + 1e-9))
+    assert [float(s) for _, _, s in rows] == [float(f"{sd:.2g}") for sd in std]
     assert "100 RMS error / (2 torque limit)" in " ".join(text.split())

@@ -18,6 +18,7 @@ from ..._output import (
     markdown_table,
     pyplot,
     save_figure,
+    to_its_std,
     write_json,
     write_text,
 )
@@ -222,7 +223,7 @@ class IdentificationReport:
         joints = robot.joint_names
         std = ident.std if ident.std is not None else np.full(len(ident.values), np.nan)
         relative = relative_std_percent(std, ident.values)
-        rows = [[str(i), name, f"{value:.6g}", f"{sd:.3g}", f"{rel:.3g}"]
+        rows = [[str(i), name, to_its_std(value, sd), to_its_std(sd, sd), f"{rel:.3g}"]
                 for i, (name, value, sd, rel)
                 in enumerate(zip(ident.names, ident.values, std, relative), 1)]
         lines = [f"{robot.name}: {len(ident.names)} parameters identified by {ident.method} "
@@ -234,13 +235,14 @@ class IdentificationReport:
                      ("#", "row number"),
                      ("parameter", "a base parameter (Eq. 3-4, `R` where others are "
                       "regrouped onto it) or an extra term of the friction model"),
-                     ("value", f"the identified value {PARAMETER_UNITS}"
+                     ("value", f"the identified value to its std's second significant "
+                      f"digit (every digit in the JSON) {PARAMETER_UNITS}"
                       f"{model_units(ident.model)}"),
-                     ("std", "its standard deviation in the value's unit, from the residual "
-                      "covariance s^2 (W^T W)^-1 of the weighted rows W (exact for OLS and WLS "
-                      "with independent errors and the model right; a linearisation that "
-                      "ignores the constraints and the prior of a physical fit; `inf`: not "
-                      "determined by the data)"),
+                     ("std", "its standard deviation in the value's unit (2 significant "
+                      "digits), from the residual covariance s^2 (W^T W)^-1 of the weighted "
+                      "rows W (exact for OLS and WLS with independent errors and the model "
+                      "right; a linearisation that ignores the constraints and the prior of a "
+                      "physical fit; `inf`: not determined by the data)"),
                      ("relative std [%]", "100 std / |value|")),
                  *stage_lines(ident.settings, ident.model.terms),
                  "", "fit (identification data):", "", metrics_table(self.fit, joints), "",
@@ -385,16 +387,11 @@ class IdentificationReport:
                 written.append(os.path.join(out_dir, name))
             write_json(os.path.join(out_dir, "identification.json"), document)
             written.append(os.path.join(out_dir, "identification.json"))
-        if json_path is not None:
-            os.makedirs(os.path.dirname(os.path.abspath(json_path)), exist_ok=True)
-            write_json(json_path, document)
-            written.append(os.fspath(json_path))
-        if urdf_path is not None and urdf is not None:
-            os.makedirs(os.path.dirname(os.path.abspath(urdf_path)), exist_ok=True)
-            write_text(urdf_path, urdf)
-            written.append(os.fspath(urdf_path))
-        if mjcf_path is not None and self.mjcf is not None:
-            os.makedirs(os.path.dirname(os.path.abspath(mjcf_path)), exist_ok=True)
-            write_text(mjcf_path, self.mjcf)
-            written.append(os.fspath(mjcf_path))
+        outputs = ((json_path, write_json, document), (urdf_path, write_text, urdf),
+                   (mjcf_path, write_text, self.mjcf))
+        for path, write, body in outputs:
+            if path is not None and body is not None:
+                os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+                write(path, body)  # type: ignore[arg-type]
+                written.append(os.fspath(path))
         return written

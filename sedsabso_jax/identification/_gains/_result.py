@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ..._output import jsonable, markdown_table
+from ..._output import jsonable, markdown_table, to_its_std
 from ...measurements._container import Measurements
 from .._payload._term import PAYLOAD_PARAMETERS
 from ._solvers import GAIN_METHODS
@@ -127,8 +127,8 @@ class DriveGains:
     def text(self) -> str:
         """The gains as a markdown table: motor, gain, std, relative std, calibrated."""
         label = "motor" if self.motor_side else "joint"
-        cells = [[name, "not determined" if not np.isfinite(g) else f"{g:.6g}",
-                  "inf" if not np.isfinite(s) else f"{s:.3g}",
+        cells = [[name, "not determined" if not np.isfinite(g) else to_its_std(g, s),
+                  "inf" if not np.isfinite(s) else to_its_std(s, s),
                   "inf" if not np.isfinite(r) else f"{100 * r:.3g}", "yes" if ok else "NO"]
                  for name, g, s, r, ok in zip(self.labels, self.gains, self.std,
                                               self.relative_std, self.calibrated)]

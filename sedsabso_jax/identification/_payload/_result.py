@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Float
 
-from ..._output import jsonable, markdown_table
+from ..._output import jsonable, markdown_table, to_its_std
 from ...dynamics._inertia import inertia_matrix
 from ._term import PAYLOAD_PARAMETERS
 
@@ -138,8 +138,9 @@ class Payload:
             flat = [values[i, j] for i, j in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))]
             rows += [[f"{label} {n}", v, q[off + i], "kg m^2"]
                      for i, (n, v) in enumerate(zip(_INERTIA, flat))]
-        cells = [[r[0], "not determined" if not np.isfinite(r[1]) else f"{r[1]:.6g}",
-                  "inf" if not np.isfinite(r[2]) else f"{r[2]:.3g}", r[3]] for r in rows]
+        cells = [[r[0], "not determined" if not np.isfinite(r[1]) else to_its_std(r[1], r[2]),
+                  "inf" if not np.isfinite(r[2]) else to_its_std(r[2], r[2]), r[3]]
+                 for r in rows]
         where = self.link if self.link == self.moving_link else (
             f"{self.link} (fixed to {self.moving_link})")
         how = ("the unconstrained estimate, already consistent"
