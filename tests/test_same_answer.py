@@ -10,7 +10,7 @@ what it found.
 - The KUKA LWR4+'s friction at rest searched with OpenBLAS made to use another
   processor's kernels (``OPENBLAS_CORETYPE``), in a second process: the parameters differ
   by less than 1e-3 of their standard deviations (before, the displacements ended 1-5 %
-  apart and the values moved by up to 7 % of theirs).
+  apart and the values moved by up to 7 % of theirs), and print the same.
 - ``identify(robot, data, fit.estimator, fit.model)`` fits the same model again: equal
   values, no new search.
 """
@@ -31,6 +31,7 @@ import numpy as np
 import pytest
 
 import sedsabso_jax as sj
+from sedsabso_jax._output import to_its_std
 from sedsabso_jax.identification import CoordinateSearch, Held, parse_friction
 
 LOWER, UPPER = np.full(3, -4.0), np.full(3, 4.0)
@@ -177,6 +178,9 @@ def test_another_processors_kernels_give_the_same_parameters(tmp_path):
                                q_c, rtol=1e-6)
     values, std = np.array(here["values"]), np.array(here["std"])
     assert np.all(np.abs(np.array(other["values"]) - values) <= 1e-3 * std)
+    # and the report prints the same (each value to its std's second significant digit)
+    assert ([to_its_std(v, s) for v, s in zip(other["values"], other["std"])]
+            == [to_its_std(v, s) for v, s in zip(values, std)])
 
 
 # ------------------------------------------------------------------------- refit
