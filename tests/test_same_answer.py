@@ -224,4 +224,9 @@ def test_a_displacement_the_data_cannot_place_is_not_determined():
 
     line = stage_lines(fit.settings, fit.model.terms)[1]
     assert re.search(r"q_c2 = [0-9.e-]+ rad \(not determined\)", line), line
-    assert re.search(r"q_c1 = [0-9.e-]+ \+- [0-9.e-]+ rad,", line), line
+    shown = re.search(r"q_c1 = ([0-9.]+) \+- [0-9.e-]+ rad,", line)
+    assert shown, line
+    # printed to its std's second significant digit: as many decimals, within half of it
+    step = int(np.floor(np.log10(found["q_c1"]["std"]))) - 1
+    assert len(shown.group(1).split(".")[1]) == -step, (line, found["q_c1"])
+    assert abs(float(shown.group(1)) - found["q_c1"]["value"]) <= 0.5 * 10.0 ** step * 1.001
