@@ -29,8 +29,7 @@ from ..optim._linear import ILL_RTOL, factorize
 #: and ``d`` parameters a least-squares residual's RMS is ``sqrt(1 - d/m)`` of the
 #: noise's and a prediction's ``sqrt(1 + d/m)``: at 5 per parameter both within 11 %, so
 #: the fit's and the validated errors mean what they say (whether the motion determines
-#: the parameters is the condition number's to say, :data:`COND_ERROR`). The tests'
-#: smallest deliberate case has 5.7 (``tests/test_uncertainty.py``).
+#: the parameters is the condition number's to say, :data:`COND_ERROR`).
 MIN_ROWS_PER_PARAMETER = 5
 #: ... per parameter each validation split fits: a split's prediction RMS is then within
 #: 15 % (``sqrt(1 + 1/3)``) of the noise's; phase folds fit 4/5 of the samples, speed
@@ -38,11 +37,11 @@ MIN_ROWS_PER_PARAMETER = 5
 MIN_SPLIT_ROWS_PER_PARAMETER = 3
 #: A joint whose position spans less than this (rad, or m on a prismatic joint) over all
 #: the recordings never moves: its friction and inertia are at most in the encoder's
-#: noise and the backlash (the shipped recordings' joints span 1.5 to 7 rad).
+#: noise and the backlash.
 STILL_RANGE = 0.01
 #: Condition number (unit-norm columns) of the base regressor above which the excitation
 #: is poor (a warning): torque errors of 0.1 % may then move the least determined
-#: combination of parameters by 100 %. The shipped recordings' are 6 to 54.
+#: combination of parameters by 100 %.
 COND_WARN = 1e3
 #: ... and above which the data do not determine the base parameters (an error): the
 #: ratio the package calls poorly identifiable (``optim._linear.ILL_RTOL``).
@@ -55,10 +54,8 @@ LIMIT_FACTOR = 10.0
 PEAK_QUANTILE = 0.995
 #: Positions beyond a joint's limits by more than this many times its range (``q_max -
 #: q_min``) are an error: no zero offset does that (a URDF's limits are often the
-#: controller's, inside the stops, and simulated test motions leave the RS010N's table by
-#: 0.2 rad), while degrees for radians (57 x) do as soon as a joint passes (its limit +
-#: its range) / 57 rad, 0.1 to 0.2 rad on the shipped robots, and millimetres for metres
-#: (1000 x).
+#: controller's, inside the stops), while degrees for radians (57 x) do as soon as a
+#: joint passes (its limit + its range) / 57 rad, and millimetres for metres (1000 x).
 POSITION_RANGES = 1.0
 
 

@@ -3,9 +3,9 @@
 around the a-priori parameters.
 
 A box that is too small holds the fit back: parameters end on its faces and the fit is
-worse than least squares, with nothing else to say so (the KUKA LWR4+'s run with the
-default box held out 0.395 % against OLS's 0.216 %). The fit reports the parameters on a
-face (``at_bounds`` in its settings) and warns when there are any.
+worse than least squares, with nothing else to say so. The fit reports the parameters on
+a face (``at_bounds`` in its settings) and warns when there are any. How the swarms fare
+against least squares: docs/explanation/identification-defaults.md ("Not a swarm").
 """
 
 from __future__ import annotations

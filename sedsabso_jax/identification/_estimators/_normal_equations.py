@@ -12,9 +12,9 @@ diag(sqrt(lambda)) V^T`` and ``c_j = R_j^+ h_j`` from the eigendecomposition of
 c_j||^2 + floor_j`` for every ``x``. The estimators fit those ``n d`` rows as they would
 the ``T n`` rows (``floor`` and ``samples`` carry what Gautier's residual weighting needs).
 
-Forming ``G`` squares the condition number of the rows: the KUKA LWR4+'s (about 100 with
-unit-norm columns) becomes 1e4, which costs 4 of float64's 16 digits; the fits on all
-the data, whose parameters and diagnostics the user reads, keep the QR of the rows.
+Forming ``G`` squares the condition number of the rows (100 with unit-norm columns
+becomes 1e4: 4 of float64's 16 digits); the fits on all the data, whose parameters and
+diagnostics the user reads, keep the QR of the rows.
 """
 
 from __future__ import annotations

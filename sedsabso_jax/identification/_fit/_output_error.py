@@ -57,11 +57,10 @@ class OutputError(eqx.Module):
     spaced over the data, ``steps`` Levenberg-Marquardt iterations at most (each one
     Jacobian of every window), stopping earlier at relative / absolute tolerances
     ``rtol`` / ``atol`` of optimistix, the ``torque_weight`` of the inverse-dynamics
-    torque error in the cost (0: positions only; the default, 10, was chosen on the KUKA
-    LWR4+ and judged on the Franka Panda: ``python -m benchmarks.output_error``; needs
-    ``limits``), and the
-    ``longest_step`` of the rollouts' integrator (s: a sample period is split into as
-    many substeps as that needs; the cost of a Jacobian grows with their number)."""
+    torque error in the cost (0: positions only; needs ``limits``; how the default was
+    chosen: docs/explanation/mujoco.md), and the ``longest_step`` of the rollouts'
+    integrator (s: a sample period is split into as many substeps as that needs; the
+    cost of a Jacobian grows with their number)."""
 
     length: float = 0.2
     windows: int = 32

@@ -303,8 +303,7 @@ def fixed(model: TorqueModel, moved: np.ndarray) -> np.ndarray:
     spanned by the base regressor (:attr:`~sedsabso_jax.TorqueModel.kept`). A spanned
     column would add nothing to ``A``'s range but an exact dependency: its inverse Gram
     matrix would then grow to ``1 / RIDGE`` along it and carry the rounding of ``A^T C``
-    into the loss (on the TX40's motor side, jumps of 5e-8 of the loss that kept
-    Newton's method from converging)."""
+    into the loss, in jumps that keep Newton's method from converging."""
     return ~moved & model.kept
 
 

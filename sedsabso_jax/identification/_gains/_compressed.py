@@ -1,8 +1,8 @@
 """Each joint's rows compressed to their triangular factor, once, and the standard
 deviations of compressed rows.
 
-The equations have many samples and few unknowns: ``T`` rows per joint (30,000 on the
-KUKA's 25 s) against about 100 columns. A joint's rows ``B_j`` (its columns and
+The equations have many samples and few unknowns: ``T`` rows per joint (tens of
+thousands) against about 100 columns. A joint's rows ``B_j`` (its columns and
 right-hand side side by side) factor as ``B_j = Q_j R_j`` (a thin QR, once), and
 ``|B_j v| = |R_j v|`` for every ``v``: every fit of :mod:`._solvers` and
 :mod:`._likelihood` (weighted least squares, Gautier's weights, total least squares,

@@ -121,8 +121,7 @@ def _fitted(model: TorqueModel, first_eq: GainEquations, signals: tuple, motors:
     if not model.waiting:
         return first_eq, method.solve(first_eq), report
     # the first stage by the method itself: ordinary least squares (identify's first
-    # stage) would read the load off values its biased gains distort (the KUKA's wrist
-    # gains 1-2 % off in the simulation study, against 0.1-0.4 %)
+    # stage) would read the load off values its biased gains distort
     first = method.first_stage().solve(first_eq)
     values, _ = first_eq.split(first.theta)
     by_name = dict(zip(first_eq.model.names, values))
@@ -153,9 +152,8 @@ def identify_drive_gains(robot: Robot, unloaded: Data, loaded: Data, link: str, 
         com: its centre of mass [m] in ``link``'s frame, when known (None: estimated).
         model: the robot's torque model (default: viscous and Coulomb friction, a torque
             offset and Coulomb friction growing with the load per joint, ``(Offset(),
-            LoadFriction())``: without the load's friction the gains moved by up to 5 % in
-            the simulation study); one offset per recording counts the unloaded
-            recordings first.
+            LoadFriction())``: the payload's torque moves the friction too); one offset
+            per recording counts the unloaded recordings first.
         method: how the equations are solved: :class:`~._solvers.LikelihoodGains`
             (default), :class:`~._solvers.TotalGains`, :class:`~._solvers.OrdinaryGains`
             or :class:`~._solvers.PhysicalGains` (:mod:`._solvers`).

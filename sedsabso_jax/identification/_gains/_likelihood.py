@@ -3,9 +3,9 @@
 The equations of :mod:`._equations` hold the currents in the gains' columns: least
 squares on them is an errors-in-variables fit, and its gains are biased toward zero by
 the noise that the other columns cannot explain. The other columns explain nearly all of
-a current (the robot's torque over its gain), so the payload's share is what is left:
-with 2 % noise the bias of a wrist's gain reached 12 % in the simulation study
-(``python -m benchmarks.drive_gains``). The model of the data is instead::
+a current (the robot's torque over its gain), so the payload's share is what is left
+(the bias measured: docs/how-to/current-controlled.md). The model of the data is
+instead::
 
     c_m(t) = h_m (K^-T (Y x + Y_p p))_m(t) + e_m(t),     h_m = 1 / g_m
 

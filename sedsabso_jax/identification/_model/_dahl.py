@@ -27,12 +27,8 @@ The update is affine in ``z``, ``z_{k+1} = a_k z_k + b_k`` with ``b_k = s_k (1 -
 (a restart: ``a = b = 0``), and affine maps compose associatively, ``(a2, b2) o (a1, b1)
 = (a2 a1, a2 b1 + b2)``: the whole recording is a prefix composition, which
 ``jax.lax.associative_scan`` computes in ``log2(T)`` parallel steps instead of ``T``
-sequential ones (:data:`SEQUENTIAL` chooses per backend, :func:`dahl_state`).
-
-A LuGre model (Canudas de Wit et al., *IEEE TAC* 40(3), 1995) adds a rate-dependent
-state equation and Stribeck's curve; its extra parameters (``sigma_1``, ``v_s``) are the
-ones the KUKA's data could not fix (:class:`~._friction.Stribeck`'s fitted velocities end
-on a bound), so the simpler, rate-independent state is the one delivered.
+sequential ones (:data:`SEQUENTIAL` chooses per backend, :func:`dahl_state`). Why
+Dahl's and not LuGre's: docs/explanation/identification-defaults.md.
 """
 
 from __future__ import annotations

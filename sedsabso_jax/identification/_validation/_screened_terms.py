@@ -1,9 +1,8 @@
 """Scales the default searches only where they validate better (:class:`ScreenedTerms`,
 :data:`SCREENED_TERMS`, :func:`with_screened`): the smooth Coulomb's velocity scales.
 
-Searching the smooth Coulomb's scale of every joint can lower a robot's error on new
-motions (the Staubli TX40's), but validating a model with them searched in every split
-costs 2-3 times the default's identification. The default searches them from
+Validating a model with every joint's smooth Coulomb scale searched in every split
+costs several times the default's identification. The default searches them from
 :attr:`~.._default._policy.Default.noise_floor` (6) times the velocities' noise up
 (:meth:`ScreenedTerms.at_noise`; from the candidates' own 0.02 rad/s where the
 recordings do not give it): a sharper jump flips with that noise wherever a joint
