@@ -144,6 +144,36 @@ def test_reproduce_tables():
     assert "1e-9 sum |tau|" in table4(results)
 
 
+def test_reproduce_tables_print_the_same_on_another_processor():
+    """Noise-free data: the baselines' fitness and errors are rounding (another
+    processor's: 1.43e-10 or 9.87e-11 N m, errors 2.8e-14 or 7.1e-14, a value -1e-15 or
+    +1e-15); both print the same (``0``, ``0.0000``), what lies above 1e-9 of the scale
+    as it is."""
+    def results(fitness: float, error: float, sign: float) -> dict:
+        r = _results()
+        r["torque_l1_norm"] = 2e5  # the rounding floor 2e-4 N m
+        for k, m in enumerate(("OLS", "LM", "L1-LP")):
+            r["algorithms"][m].update(fitness_mean=fitness * (k + 1), fitness_std=0.0,
+                                      max_abs_error=error,
+                                      params_mean=[1.0 + error, sign * 1e-15])
+        r["base_parameters"]["true"] = [1.0, 0.0]
+        f_l1 = r["algorithms"]["L1-LP"]["fitness_mean"]
+        for m in ("OLS", "LM"):  # as the experiment computes it
+            r["algorithms"][m]["gap_to_l1_optimum"] = (
+                r["algorithms"][m]["fitness_mean"] - f_l1) / max(f_l1, 1e-9 * 2e5)
+        return r
+
+    here, other = results(1.43e-10, 2.8e-14, -1.0), results(9.87e-11, 7.1e-14, 1.0)
+    assert table4(here) == table4(other) and table5(here) == table5(other)
+    ols = next(r for r in table4(here).splitlines() if r.startswith("| OLS"))
+    assert [c.strip() for c in ols.split("|")[2:4]] == ["0", "0"]
+    assert ols.split("|")[8].strip() == "0"  # the gap
+    assert "-0.0000" not in table5(here) and undefined(table4(here)) == []
+    above = results(1e-3, 1e-6, 1.0)  # above the floors: as they are
+    ols = next(r for r in table4(above).splitlines() if r.startswith("| OLS"))
+    assert [c.strip() for c in ols.split("|")[2:3]] == ["0.001"] and "1e-06" in ols
+
+
 def test_a_dropped_definition_fails():
     """The check on a real table: Table 4 without one column's definition fails."""
     text = table4(_results())

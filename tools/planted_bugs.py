@@ -818,6 +818,19 @@ BUGS = [
      "            finite = False",
      "the searched parameters printed to 4 digits, not to their std",
      ["tests/test_same_answer.py"], None),
+    ("reproduce/_report.py",
+     "    if x is not None and scale is not None and abs(x) < ROUNDING * scale:",
+     "    if False:", "Table 4's and 5's rounding printed as results",
+     ["tests/test_tables.py"], None),
+    ("reproduce/_report.py",
+     "    return \"0.0000\" if float(text) == 0 else text",
+     "    return text", "Table 5's values that round to 0 printed with a sign",
+     ["tests/test_tables.py"], None),
+    ("reproduce/_report.py",
+     "            a[\"fitness_mean\"] - l1[\"fitness_mean\"]) >= ROUNDING * torques else \"0\")",
+     "            a[\"fitness_mean\"] - l1[\"fitness_mean\"]) >= 0 else \"0\")",
+     "Table 4's gap of a baseline at the rounding printed as a result",
+     ["tests/test_tables.py"], None),
 ]
 
 

@@ -230,9 +230,10 @@ def run(settings: Settings = Settings(),
             "history_median": [],
         }
     l1_floor = algorithms["L1-LP"]["fitness_mean"]
+    torque_l1 = float(np.abs(data.tau).sum())
     for entry in algorithms.values():
         entry["gap_to_l1_optimum"] = baselines.gap_to_optimum(
-            entry["fitness_mean"], l1_floor, scale=float(np.abs(data.tau).sum()))
+            entry["fitness_mean"], l1_floor, scale=torque_l1)
 
     progress("done", total, total)
     device = jax.devices()[0]
@@ -252,6 +253,7 @@ def run(settings: Settings = Settings(),
         },
         "base_parameters": {"names": list(base.names), "expressions": list(base.expressions),
                             "true": true.tolist()},
+        "torque_l1_norm": torque_l1,
         "algorithms": algorithms,
     }
     return Experiment(results, history_f, history_n, phase_slots, l1_floor)
