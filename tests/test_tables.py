@@ -196,9 +196,18 @@ def _compare_docs() -> list[dict]:
 
 
 def test_compare_report():
-    text, _ = render(_compare_docs(), {"runs": 6, "budget": "100d", "seed": 0,
-                                      "dtype": "float32", "version": "0", "instances": [1, 2]})
+    settings = {"runs": 6, "budget": "100d", "seed": 0, "dtype": "float32", "version": "0",
+                "instances": [1, 2]}
+    text, _ = render(_compare_docs(), settings)
     assert len(_tables(text)) == 5 and undefined(text) == []
+    assert "## SEDSABSO against BSO and evosax PSO (" in text
+    # without BSO and PSO: the heading names the peer compared (LDWPSO)
+    docs = _compare_docs()
+    for d in docs:
+        d["algorithms"] = {"SEDSABSO": d["algorithms"]["SEDSABSO"],
+                           "LDWPSO": {**d["algorithms"]["BSO"], "label": "LDWPSO"}}
+    text, _ = render(docs, settings)
+    assert "## SEDSABSO against LDWPSO (" in text and not re.search(r"\bBSO\b", text)
 
 
 def _cross_validation(rng, tau, limits, n_parameters) -> CrossValidation:

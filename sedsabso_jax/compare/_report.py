@@ -137,7 +137,8 @@ def render(docs: list[dict], settings: dict, seconds: float | None = None,
                 worse = sum(t["significant"] and t["better"] == p for t in ts)
                 cells.append(f"{better} / {len(ts) - better - worse} / {worse}")
             rows.append([g, *cells])
-        lines += ["## SEDSABSO against BSO and PSO (significant at 0.05 after Holm)", "",
+        lines += [f"## SEDSABSO against {' and '.join(labels[p] for p in versus)} "
+                  "(significant at 0.05 after Holm)", "",
                   markdown_table(["problems", *head], rows), "", columns_note(
                       ("problems", "a group of problems"),
                       (head, "the numbers of its problems on which SEDSABSO ends significantly "
