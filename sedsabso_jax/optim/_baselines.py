@@ -141,6 +141,11 @@ def l1_optimum(problem: L1Problem) -> Result:
     return _result("L1-LP", problem, x, nit, run_s=time.perf_counter() - t0)
 
 
+#: Below this fraction of the data's size (``sum |tau|``) a fitness is rounding: on
+#: noise-free data the L1 optimum and a least-squares fit's are ~1e-9 of it.
+ROUNDING = 1e-9
+
+
 def gap_to_optimum(result_f: Float[ArrayLike, "*shape"], l1_f: Float[ArrayLike, "*shape"],
                    scale: float = 0.0) -> float | Float[np.ndarray, "*shape"]:
     """Relative gap ``(f - f_opt) / max(f_opt, 1e-9 scale)`` of a fitness ``result_f``
@@ -150,6 +155,6 @@ def gap_to_optimum(result_f: Float[ArrayLike, "*shape"], l1_f: Float[ArrayLike, 
     scale reads as a gap near -1; with it such gaps are ~0. Scalars give a float, arrays an
     array (broadcast)."""
     f, f_opt = np.asarray(result_f, float), np.asarray(l1_f, float)
-    floor = np.maximum(f_opt, max(1e-9 * float(scale), np.finfo(float).tiny))
+    floor = np.maximum(f_opt, max(ROUNDING * float(scale), np.finfo(float).tiny))
     gap = (f - f_opt) / floor
     return float(gap) if gap.ndim == 0 else gap

@@ -16,6 +16,7 @@ from .._output import PathLike, to_json, write_text
 from ..dynamics._base_parameters import base_parameters
 from ..dynamics._robot import Robot
 from ..identification._default._report import PARAMETER_UNITS
+from ..optim._baselines import ROUNDING
 from ._experiment import Experiment
 
 if TYPE_CHECKING:
@@ -64,18 +65,18 @@ def _g(x, digits: int = 3) -> str:
     return "" if x is None else f"{x:.{digits}g}"
 
 
-#: A result below this fraction of its scale prints as ``0``: on noise-free data the
-#: baselines' fitness and errors are the rounding of float64 and the LP's tolerance,
-#: whose digits differ between processors.
-ROUNDING = 1e-9
+def _rounding(x, scale: float | None) -> bool:
+    """Whether ``x`` lies below :data:`~sedsabso_jax.optim._baselines.ROUNDING` of
+    ``scale`` (None: unknown): on noise-free data the baselines' fitness and errors are
+    the rounding of float64 and the LP's tolerance, whose digits differ between
+    processors."""
+    return x is not None and scale is not None and abs(x) < ROUNDING * scale
 
 
 def _above(x, scale: float | None, digits: int = 3) -> str:
-    """``x`` to ``digits`` significant digits, or ``0`` below :data:`ROUNDING` of
-    ``scale`` (None: unknown, as written)."""
-    if x is not None and scale is not None and abs(x) < ROUNDING * scale:
-        return "0"
-    return _g(x, digits)
+    """``x`` to ``digits`` significant digits, or ``0`` where it is rounding
+    (:func:`_rounding`)."""
+    return "0" if _rounding(x, scale) else _g(x, digits)
 
 
 def _fixed(x: float) -> str:
@@ -116,8 +117,8 @@ def table4(results: dict) -> str:
     size = float(np.max(np.abs(results["base_parameters"]["true"])))
     for name, a in results["algorithms"].items():
         fit, secs = paper.TABLE4.get(name, (None, None))
-        gap = (_g(a["gap_to_l1_optimum"], 3) if l1 is None or torques is None or abs(
-            a["fitness_mean"] - l1["fitness_mean"]) >= ROUNDING * torques else "0")
+        excess = None if l1 is None else a["fitness_mean"] - l1["fitness_mean"]
+        gap = "0" if _rounding(excess, torques) else _g(a["gap_to_l1_optimum"], 3)
         rows.append([name, _above(a["fitness_mean"], torques, 4),
                      _above(a["fitness_std"], torques), _g(a["time_mean_s"], 3),
                      _g(a["batched_time_s"], 3), _g(a["compile_s"], 3),
